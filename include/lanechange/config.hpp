@@ -1,0 +1,127 @@
+#pragma once
+// Every tunable number of the project lives here, with the defaults of
+// docs/config.md (which cites NOTES.md and the paper). A Config can be saved
+// to and loaded from JSON; a loaded file may give any subset of the fields.
+#include <nlohmann/json_fwd.hpp>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace lanechange {
+
+struct VehicleSize {
+  double length = 4.4;  ///< m, bumper to bumper (the authors' car length)
+  double width = 1.7;   ///< m (the authors' body half-width is 0.85 m)
+};
+
+struct Interval {
+  double lo = 0.0;
+  double hi = 0.0;
+  [[nodiscard]] bool contains(double value) const { return lo <= value && value <= hi; }
+};
+
+/// The ego's limits. Defaults from the authors' code (NOTES.md).
+struct Limits {
+  Interval v{0.0, 60.0 / 3.6};                        ///< m/s
+  Interval a{-6.0, 6.0};                              ///< m/s^2
+  Interval omega{-0.26179938779914941, 0.26179938779914941};  ///< rad/s, 15 deg/s
+  double lateral_margin = 3.75 / 15.0;  ///< m; y stays in [-margin, w + margin]
+};
+
+/// Intelligent Driver Model (Treiber, Hennecke, Helbing 2000).
+struct IdmParameters {
+  double desired_speed = 40.0 / 3.6;  ///< v0, m/s
+  double time_headway = 1.5;          ///< T, s
+  double min_gap = 2.0;               ///< s0, m (bumper to bumper)
+  double max_accel = 1.0;             ///< a, m/s^2
+  double comfortable_decel = 1.67;    ///< b, m/s^2
+  double exponent = 4.0;              ///< delta
+};
+
+/// One safe distance of Eq. 1: Delta = standstill + time_headway * v, where v
+/// is the ego's speed for a car ahead of it and the follower's speed for the
+/// follower. Measured centre to centre, so a standstill below the car length
+/// allows contact.
+struct SafeDistance {
+  double standstill = 0.0;    ///< m
+  double time_headway = 0.0;  ///< s
+};
+
+struct SafetyMargins {
+  SafeDistance leader{8.4, 0.5};    ///< car length + 4 m, plus half a second
+  SafeDistance follower{8.4, 0.5};
+  SafeDistance target{8.4, 0.5};
+};
+
+enum class LaneRule {
+  EitherOr,   ///< the paper's Eq. 1: the ego is in exactly one lane at a time
+  Footprint,  ///< the ego is in every lane its body touches (safer)
+};
+
+enum class JerkWeighting {
+  Derivative,  ///< c2 * (da/dt)^2 integrated, as the paper's text
+  Difference,  ///< c2 * (a_{k+1} - a_k)^2 summed times dt, as the authors' code
+};
+
+struct ExpertSettings {
+  double horizon = 5.0;  ///< t_f, s
+  int steps = 50;        ///< N
+  double weight_accel = 0.5;    ///< c1
+  double weight_jerk = 100.0;   ///< c2
+  double weight_lateral = 1.0;  ///< c3
+  double weight_terminal_x = 0.0;  ///< pull of x_N towards the aim point (authors: 0.005)
+  JerkWeighting jerk_weighting = JerkWeighting::Derivative;
+  LaneRule lane_rule = LaneRule::EitherOr;
+  int max_iterations = 10;          ///< linearization rounds
+  double convergence_tolerance = 0.1;  ///< m, largest change of x and y between rounds
+  double big_m = 1000.0;  ///< m; must exceed any distance a lane constraint relaxes
+};
+
+/// The labeller of NOTES.md (Sec. III of the paper).
+struct LabelTolerances {
+  double reach = 0.25;           ///< m: |y(t_f) - w| within this counts as reaching the TL
+  double reversal = 0.10;        ///< m: a drop of y below its running maximum beyond this is a reversal
+  double max_final_heading = 0.17453292519943295;  ///< rad, 10 deg
+};
+
+/// The random scenario sampler (docs/scenarios.md).
+struct SamplerSettings {
+  Interval leader_speed{20.0 / 3.6, 40.0 / 3.6};    ///< vehicle 1, m/s
+  Interval follower_speed{20.0 / 3.6, 40.0 / 3.6};  ///< vehicle 2, m/s
+  Interval target_speed{20.0 / 3.6, 40.0 / 3.6};    ///< vehicle 3, m/s
+  Interval ego_speed_ratio{0.9, 1.1};               ///< ego speed / leader speed
+  Interval leader_headway{3.0, 5.0};  ///< s: the ego's time gap to the leader (>= 3 s rule)
+  Interval follower_offset{-40.0, 10.0};  ///< m: follower centre relative to the ego
+  Interval gap_length{1.0, 50.0};  ///< m: free space between follower and target bumpers
+  Interval accel{-1.0, 1.0};       ///< m/s^2, for constant_accel
+};
+
+struct Config {
+  std::string preset = "paper";
+  double lane_width = 3.75;  ///< m
+  VehicleSize vehicle;
+  Limits limits;
+  IdmParameters idm;
+  double traffic_max_speed = 60.0 / 3.6;  ///< m/s: constant-accel cars stay in [0, this]
+  SafetyMargins safety;
+  ExpertSettings expert;
+  LabelTolerances labels;
+  SamplerSettings sampler;
+
+  [[nodiscard]] double dt() const { return expert.horizon / expert.steps; }
+  /// Throws InputError when a value is non-finite or out of its physical range.
+  void validate() const;
+};
+
+/// Named presets: "paper" (the default) and "authors" (the public MATLAB code).
+[[nodiscard]] Config make_preset(std::string_view name);
+[[nodiscard]] std::vector<std::string> preset_names();
+
+void to_json(nlohmann::json& out, const Config& config);
+/// Starts from the preset named in the file (or "paper") and overrides the
+/// fields present. Unknown keys are an error, so typos do not pass silently.
+[[nodiscard]] Config config_from_json(const nlohmann::json& in);
+[[nodiscard]] Config load_config(const std::string& path);
+void save_config(const Config& config, const std::string& path);
+
+}  // namespace lanechange

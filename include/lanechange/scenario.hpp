@@ -1,0 +1,83 @@
+#pragma once
+// A lane-change scenario (spec/formats.md, "lanechange.scenario/1"): the ego,
+// the leader in its lane, and the follower and target (leader) in the lane to
+// its left. x is along the road, y across it; x and y locate a car's centre.
+#include <nlohmann/json_fwd.hpp>
+#include <string>
+#include <string_view>
+
+#include "lanechange/config.hpp"
+
+namespace lanechange {
+
+inline constexpr std::string_view kScenarioFormat = "lanechange.scenario/1";
+
+enum class Behavior { ConstantSpeed, ConstantAccel, Idm };
+
+[[nodiscard]] std::string_view to_string(Behavior behavior);
+/// Throws InputError naming `field` for an unknown name.
+[[nodiscard]] Behavior behavior_from_string(std::string_view name,
+                                            const std::string& field = "behavior");
+
+struct EgoState {
+  double x = 0.0;
+  double y = 0.0;
+  double v = 0.0;
+  double theta = 0.0;
+  double a = 0.0;
+};
+
+/// A car that stays in its lane.
+struct CarState {
+  double x = 0.0;
+  double v = 0.0;
+  double a = 0.0;
+};
+
+enum class Car { Leader, Follower, Target };
+inline constexpr Car kAllCars[] = {Car::Leader, Car::Follower, Car::Target};
+[[nodiscard]] std::string_view to_string(Car car);
+
+struct Scenario {
+  double lane_width = 3.75;
+  Behavior behavior = Behavior::ConstantSpeed;
+  EgoState ego;
+  CarState leader;
+  CarState follower;
+  CarState target;
+  // The optional fields of the format, filled from the config when absent.
+  double horizon = 5.0;
+  int steps = 50;
+  VehicleSize vehicle;
+  IdmParameters idm;
+  SafetyMargins safe_distance;
+  Limits limits;
+
+  [[nodiscard]] const CarState& car(Car which) const;
+  [[nodiscard]] CarState& car(Car which);
+  /// Lane centre of a car: 0 for the leader, lane_width for the others.
+  [[nodiscard]] double lane_center(Car which) const;
+};
+
+/// A scenario with every optional field taken from `defaults`.
+[[nodiscard]] Scenario default_scenario(const Config& defaults);
+
+/// Parses and validates. Throws InputError naming the field for every bad
+/// input of formats.md: a missing field, an unknown behavior, a non-finite
+/// number, a negative speed or lane width, or cars that overlap at t = 0.
+[[nodiscard]] Scenario scenario_from_json(const nlohmann::json& in, const Config& defaults);
+[[nodiscard]] Scenario scenario_from_text(const std::string& text, const Config& defaults);
+[[nodiscard]] Scenario load_scenario(const std::string& path, const Config& defaults);
+
+/// Writes every field, the optional ones included.
+[[nodiscard]] nlohmann::json scenario_to_json(const Scenario& scenario);
+void save_scenario(const Scenario& scenario, const std::string& path);
+
+/// Physical checks that do not depend on the JSON: speeds, geometry, overlap.
+void validate_scenario(const Scenario& scenario);
+
+/// The config with the scenario's own lane width, horizon, vehicle, IDM,
+/// safety and limits in place of the defaults.
+[[nodiscard]] Config effective_config(const Config& base, const Scenario& scenario);
+
+}  // namespace lanechange

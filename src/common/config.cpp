@@ -1,0 +1,101 @@
+#include "lanechange/config.hpp"
+
+#include <array>
+#include <cmath>
+
+#include "common/config_fields.hpp"
+
+namespace lanechange {
+
+namespace {
+
+void require(bool ok, const char* field, const char* problem) {
+  if (!ok) throw InputError(field, problem);
+}
+
+}  // namespace
+
+void Config::validate() const {
+  require(lane_width > 0, "lane_width", "must be positive");
+  require(vehicle.length > 0, "vehicle.length", "must be positive");
+  require(vehicle.width > 0, "vehicle.width", "must be positive");
+  require(vehicle.width < lane_width, "vehicle.width", "must be narrower than the lane");
+  require(limits.v.lo >= 0, "limits.v", "must not allow negative speeds");
+  require(limits.a.lo < 0 && limits.a.hi > 0, "limits.a", "must contain zero strictly");
+  require(limits.omega.lo < 0 && limits.omega.hi > 0, "limits.omega", "must contain zero strictly");
+  require(limits.lateral_margin >= 0, "limits.lateral_margin", "must not be negative");
+  require(idm.desired_speed > 0, "idm.desired_speed", "must be positive");
+  require(idm.time_headway >= 0, "idm.time_headway", "must not be negative");
+  require(idm.min_gap >= 0, "idm.min_gap", "must not be negative");
+  require(idm.max_accel > 0, "idm.max_accel", "must be positive");
+  require(idm.comfortable_decel > 0, "idm.comfortable_decel", "must be positive");
+  require(idm.exponent > 0, "idm.exponent", "must be positive");
+  require(traffic_max_speed > 0, "traffic_max_speed", "must be positive");
+  for (const auto* d : {&safety.leader, &safety.follower, &safety.target}) {
+    require(d->standstill >= 0 && d->time_headway >= 0, "safety", "distances must not be negative");
+  }
+  require(expert.horizon > 0, "expert.horizon", "must be positive");
+  require(expert.steps >= 2 && expert.steps <= 10000, "expert.steps", "must be in [2, 10000]");
+  require(expert.weight_accel >= 0 && expert.weight_jerk >= 0 && expert.weight_lateral >= 0 &&
+              expert.weight_terminal_x >= 0,
+          "expert", "cost weights must not be negative");
+  require(expert.max_iterations >= 1, "expert.max_iterations", "must be at least 1");
+  require(expert.convergence_tolerance > 0, "expert.convergence_tolerance", "must be positive");
+  require(expert.big_m > 0, "expert.big_m", "must be positive");
+  require(labels.reach > 0, "labels.reach", "must be positive");
+  require(labels.reversal >= 0, "labels.reversal", "must not be negative");
+  require(labels.max_final_heading > 0, "labels.max_final_heading", "must be positive");
+  require(sampler.leader_speed.lo >= 0 && sampler.follower_speed.lo >= 0 &&
+              sampler.target_speed.lo >= 0 && sampler.ego_speed_ratio.lo >= 0,
+          "sampler", "speeds must not be negative");
+  require(sampler.leader_headway.lo >= 0, "sampler.leader_headway", "must not be negative");
+  require(sampler.gap_length.lo >= 0, "sampler.gap_length", "must not be negative");
+}
+
+namespace {
+
+// The authors' public MATLAB code (NOTES.md and reference/README.md).
+Config authors_preset() {
+  Config c;
+  c.preset = "authors";
+  c.idm.desired_speed = 30.0 / 3.6;
+  c.idm.max_accel = 6.0;
+  c.safety.leader = {0.0, 3.0};
+  c.safety.target = {0.0, 3.0};
+  c.safety.follower = {0.0, 0.0};
+  c.expert.weight_terminal_x = 0.005;
+  c.expert.jerk_weighting = JerkWeighting::Difference;
+  c.expert.lane_rule = LaneRule::Footprint;
+  c.sampler.target_speed = {20.0 / 3.6, 40.0 / 3.6};
+  return c;
+}
+
+}  // namespace
+
+std::vector<std::string> preset_names() { return {"paper", "authors"}; }
+
+Config make_preset(std::string_view name) {
+  if (name == "paper") return Config{};
+  if (name == "authors") return authors_preset();
+  throw InputError("preset", "unknown preset \"" + std::string(name) + "\" (expected paper or authors)");
+}
+
+void to_json(nlohmann::json& out, const Config& config) { out = detail::write_value(config); }
+
+Config config_from_json(const nlohmann::json& in) {
+  if (!in.is_object()) throw InputError("", "a config must be a JSON object");
+  std::string preset = "paper";
+  if (auto it = in.find("preset"); it != in.end()) detail::read_value(*it, "preset", preset);
+  Config config = make_preset(preset);
+  detail::read_value(in, "", config);
+  config.validate();
+  return config;
+}
+
+Config load_config(const std::string& path) { return config_from_json(detail::read_json_file(path)); }
+
+void save_config(const Config& config, const std::string& path) {
+  detail::write_file_atomically(path, detail::write_value(config).dump(2) + "\n");
+}
+
+}  // namespace lanechange

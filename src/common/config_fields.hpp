@@ -1,0 +1,124 @@
+#pragma once
+// The field lists of the config structs, shared by the config and scenario
+// readers and writers.
+#include <array>
+#include <concepts>
+
+#include "common/json_fields.hpp"
+#include "lanechange/config.hpp"
+
+namespace lanechange {
+
+
+inline constexpr std::array<detail::EnumName<LaneRule>, 2> enum_names(LaneRule) {
+  return {{{LaneRule::EitherOr, "either_or"}, {LaneRule::Footprint, "footprint"}}};
+}
+
+inline constexpr std::array<detail::EnumName<JerkWeighting>, 2> enum_names(JerkWeighting) {
+  return {{{JerkWeighting::Derivative, "derivative"}, {JerkWeighting::Difference, "difference"}}};
+}
+
+template <class V, class S>
+void visit_fields(V& v, S& s)
+  requires std::same_as<std::remove_const_t<S>, VehicleSize>
+{
+  v("length", s.length);
+  v("width", s.width);
+}
+
+template <class V, class S>
+void visit_fields(V& v, S& s)
+  requires std::same_as<std::remove_const_t<S>, Limits>
+{
+  v("v", s.v);
+  v("a", s.a);
+  v("omega", s.omega);
+  v("lateral_margin", s.lateral_margin);
+}
+
+template <class V, class S>
+void visit_fields(V& v, S& s)
+  requires std::same_as<std::remove_const_t<S>, IdmParameters>
+{
+  v("desired_speed", s.desired_speed);
+  v("time_headway", s.time_headway);
+  v("min_gap", s.min_gap);
+  v("max_accel", s.max_accel);
+  v("comfortable_decel", s.comfortable_decel);
+  v("exponent", s.exponent);
+}
+
+template <class V, class S>
+void visit_fields(V& v, S& s)
+  requires std::same_as<std::remove_const_t<S>, SafeDistance>
+{
+  v("standstill", s.standstill);
+  v("time_headway", s.time_headway);
+}
+
+template <class V, class S>
+void visit_fields(V& v, S& s)
+  requires std::same_as<std::remove_const_t<S>, SafetyMargins>
+{
+  v("leader", s.leader);
+  v("follower", s.follower);
+  v("target", s.target);
+}
+
+template <class V, class S>
+void visit_fields(V& v, S& s)
+  requires std::same_as<std::remove_const_t<S>, ExpertSettings>
+{
+  v("horizon", s.horizon);
+  v("steps", s.steps);
+  v("weight_accel", s.weight_accel);
+  v("weight_jerk", s.weight_jerk);
+  v("weight_lateral", s.weight_lateral);
+  v("weight_terminal_x", s.weight_terminal_x);
+  v("jerk_weighting", s.jerk_weighting);
+  v("lane_rule", s.lane_rule);
+  v("max_iterations", s.max_iterations);
+  v("convergence_tolerance", s.convergence_tolerance);
+  v("big_m", s.big_m);
+}
+
+template <class V, class S>
+void visit_fields(V& v, S& s)
+  requires std::same_as<std::remove_const_t<S>, LabelTolerances>
+{
+  v("reach", s.reach);
+  v("reversal", s.reversal);
+  v("max_final_heading", s.max_final_heading);
+}
+
+template <class V, class S>
+void visit_fields(V& v, S& s)
+  requires std::same_as<std::remove_const_t<S>, SamplerSettings>
+{
+  v("leader_speed", s.leader_speed);
+  v("follower_speed", s.follower_speed);
+  v("target_speed", s.target_speed);
+  v("ego_speed_ratio", s.ego_speed_ratio);
+  v("leader_headway", s.leader_headway);
+  v("follower_offset", s.follower_offset);
+  v("gap_length", s.gap_length);
+  v("accel", s.accel);
+}
+
+template <class V, class S>
+void visit_fields(V& v, S& s)
+  requires std::same_as<std::remove_const_t<S>, Config>
+{
+  v("preset", s.preset);
+  v("lane_width", s.lane_width);
+  v("vehicle", s.vehicle);
+  v("limits", s.limits);
+  v("idm", s.idm);
+  v("traffic_max_speed", s.traffic_max_speed);
+  v("safety", s.safety);
+  v("expert", s.expert);
+  v("labels", s.labels);
+  v("sampler", s.sampler);
+}
+
+}  // namespace lanechange

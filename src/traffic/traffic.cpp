@@ -1,0 +1,131 @@
+#include "lanechange/traffic.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace lanechange {
+
+double idm_acceleration(const IdmParameters& p, double v, double gap, double leader_speed) {
+  const double free_road = 1.0 - std::pow(v / p.desired_speed, p.exponent);
+  if (!std::isfinite(gap)) return p.max_accel * free_road;
+  // A car that touches its leader brakes as hard as the model can; a tiny
+  // floor keeps the ratio finite.
+  const double safe_gap = std::max(gap, 1e-3);
+  const double dynamic = v * p.time_headway +
+                         v * (v - leader_speed) / (2.0 * std::sqrt(p.max_accel * p.comfortable_decel));
+  const double desired_gap = p.min_gap + std::max(0.0, dynamic);
+  const double ratio = desired_gap / safe_gap;
+  return p.max_accel * (free_road - ratio * ratio);
+}
+
+void advance_constant_accel(CarState& car, double dt, double v_max) {
+  const double bound = car.a > 0 ? v_max : 0.0;
+  const bool moving_towards_bound = car.a > 0 ? car.v < bound : (car.a < 0 && car.v > bound);
+  if (!moving_towards_bound) {
+    car.v = std::clamp(car.v, 0.0, v_max);
+    car.x += car.v * dt;
+    return;
+  }
+  const double time_to_bound = (bound - car.v) / car.a;
+  if (time_to_bound >= dt) {
+    car.x += car.v * dt + 0.5 * car.a * dt * dt;
+    car.v += car.a * dt;
+    return;
+  }
+  car.x += car.v * time_to_bound + 0.5 * car.a * time_to_bound * time_to_bound;
+  car.x += bound * (dt - time_to_bound);
+  car.v = bound;
+}
+
+bool body_in_lane(double y, double ego_width, double lane_center, double lane_width) {
+  return std::abs(y - lane_center) < 0.5 * (lane_width + ego_width);
+}
+
+TrafficModel::TrafficModel(const Scenario& scenario, const Config& config)
+    : behavior_(scenario.behavior),
+      lane_width_(scenario.lane_width),
+      vehicle_(scenario.vehicle),
+      idm_(scenario.idm),
+      v_max_(config.traffic_max_speed),
+      cars_{scenario.leader, scenario.follower, scenario.target} {
+  if (behavior_ == Behavior::ConstantSpeed) {
+    for (auto& c : cars_) c.a = 0.0;
+  }
+}
+
+double TrafficModel::idm_accel_of(Car which, const EgoFootprint& ego) const {
+  const CarState& me = car(which);
+  const double my_lane = which == Car::Leader ? 0.0 : lane_width_;
+  double gap = std::numeric_limits<double>::infinity();
+  double leader_speed = me.v;
+  auto consider = [&](double x, double v) {
+    const double g = x - me.x - vehicle_.length;
+    if (x > me.x && g < gap) {
+      gap = g;
+      leader_speed = v;
+    }
+  };
+  for (Car other : kAllCars) {
+    const double other_lane = other == Car::Leader ? 0.0 : lane_width_;
+    if (other != which && other_lane == my_lane) consider(car(other).x, car(other).v);
+  }
+  if (body_in_lane(ego.y, vehicle_.width, my_lane, lane_width_)) {
+    consider(ego.x, ego.v);
+  }
+  return idm_acceleration(idm_, me.v, gap, leader_speed);
+}
+
+void TrafficModel::step(double dt, const EgoFootprint& ego) {
+  if (behavior_ == Behavior::Idm) {
+    std::array<double, 3> accel{};
+    for (Car c : kAllCars) accel[index(c)] = idm_accel_of(c, ego);
+    for (Car c : kAllCars) cars_[index(c)].a = accel[index(c)];
+  }
+  for (auto& c : cars_) {
+    if (behavior_ == Behavior::Idm) {
+      // Ballistic update with a stop instead of reversing (Treiber and Kesting).
+      if (c.v + c.a * dt < 0.0) {
+        c.x += c.v * c.v / (2.0 * std::max(-c.a, 1e-9));
+        c.v = 0.0;
+      } else {
+        c.x += c.v * dt + 0.5 * c.a * dt * dt;
+        c.v += c.a * dt;
+      }
+    } else {
+      advance_constant_accel(c, dt, v_max_);
+    }
+  }
+  time_ += dt;
+}
+
+TrafficPrediction predict_traffic(const Scenario& scenario, const Config& config, int steps,
+                                  double dt, const std::vector<EgoFootprint>* ego_path) {
+  TrafficModel model(scenario, config);
+  TrafficPrediction out;
+  out.dt = dt;
+  for (auto& track : out.cars) {
+    track.x.reserve(steps + 1);
+    track.v.reserve(steps + 1);
+    track.a.reserve(steps + 1);
+  }
+  auto record = [&] {
+    for (Car c : kAllCars) {
+      auto& track = out.cars[static_cast<std::size_t>(c)];
+      track.x.push_back(model.car(c).x);
+      track.v.push_back(model.car(c).v);
+    }
+  };
+  record();
+  for (int k = 0; k < steps; ++k) {
+    EgoFootprint ego{scenario.ego.x + scenario.ego.v * k * dt, scenario.ego.y, scenario.ego.v};
+    if (ego_path != nullptr && k < static_cast<int>(ego_path->size())) ego = (*ego_path)[k];
+    model.step(dt, ego);
+    for (Car c : kAllCars) out.cars[static_cast<std::size_t>(c)].a.push_back(model.car(c).a);
+    record();
+  }
+  for (auto& track : out.cars) track.a.push_back(track.a.empty() ? 0.0 : track.a.back());
+  return out;
+}
+
+}  // namespace lanechange

@@ -1,0 +1,170 @@
+#include <iostream>
+
+#include "common/json_fields.hpp"
+#include "lanechange/trajectory.hpp"
+
+namespace lanechange {
+
+using detail::json;
+
+std::vector<double> Trajectory::ys() const {
+  std::vector<double> out;
+  out.reserve(ego.size());
+  for (const auto& s : ego) out.push_back(s.y);
+  return out;
+}
+
+Trajectory failed_trajectory(std::string planner, const Scenario& scenario, std::string reason) {
+  Trajectory t;
+  t.planner = std::move(planner);
+  t.label = Label::Failure;
+  t.reason = std::move(reason);
+  t.dt = scenario.horizon / scenario.steps;
+  t.lane_width = scenario.lane_width;
+  t.t = {0.0};
+  t.ego = {scenario.ego};
+  t.controls = {EgoControl{}};
+  t.others.dt = t.dt;
+  for (Car c : kAllCars) {
+    auto& track = t.others.cars[static_cast<std::size_t>(c)];
+    track.x = {scenario.car(c).x};
+    track.v = {scenario.car(c).v};
+    track.a = {scenario.car(c).a};
+  }
+  return t;
+}
+
+namespace {
+
+template <class F>
+std::vector<double> column(const std::vector<EgoState>& states, F field) {
+  std::vector<double> out;
+  out.reserve(states.size());
+  for (const auto& s : states) out.push_back(field(s));
+  return out;
+}
+
+std::vector<double> read_array(const json& parent, const std::string& path, const char* key,
+                               std::size_t expected) {
+  auto it = parent.find(key);
+  const std::string field = detail::join_path(path, key);
+  if (it == parent.end()) throw InputError(field, "missing required field");
+  if (!it->is_array()) throw InputError(field, "must be an array");
+  if (it->size() != expected) {
+    throw InputError(field, "has " + std::to_string(it->size()) + " entries, expected " +
+                                std::to_string(expected));
+  }
+  std::vector<double> out(expected);
+  for (std::size_t i = 0; i < expected; ++i) {
+    detail::read_value((*it)[i], field + "[" + std::to_string(i) + "]", out[i]);
+  }
+  return out;
+}
+
+const json& object_at(const json& parent, const std::string& path, const char* key) {
+  auto it = parent.find(key);
+  const std::string field = detail::join_path(path, key);
+  if (it == parent.end()) throw InputError(field, "missing required field");
+  if (!it->is_object()) throw InputError(field, "must be an object");
+  return *it;
+}
+
+}  // namespace
+
+json trajectory_to_json(const Trajectory& tr) {
+  json out = tr.details.is_object() ? tr.details : json::object();
+  out["format"] = kTrajectoryFormat;
+  out["planner"] = tr.planner;
+  out["label"] = to_string(tr.label);
+  if (!tr.reason.empty()) out["reason"] = tr.reason;
+  out["dt"] = tr.dt;
+  out["lane_width"] = tr.lane_width;
+  out["t"] = tr.t;
+  std::vector<double> a, omega;
+  for (const auto& u : tr.controls) {
+    a.push_back(u.a);
+    omega.push_back(u.omega);
+  }
+  out["ego"] = {{"x", column(tr.ego, [](const EgoState& s) { return s.x; })},
+                {"y", column(tr.ego, [](const EgoState& s) { return s.y; })},
+                {"v", column(tr.ego, [](const EgoState& s) { return s.v; })},
+                {"theta", column(tr.ego, [](const EgoState& s) { return s.theta; })},
+                {"a", a},
+                {"omega", omega}};
+  json others = json::object();
+  for (Car c : kAllCars) {
+    const auto& track = tr.others.car(c);
+    others[std::string(to_string(c))] = {{"x", track.x}, {"v", track.v}};
+  }
+  out["others"] = others;
+  out["collision"] = tr.collision;
+  out["compute_ms"] = {{"total", tr.compute_total_ms}, {"max_step", tr.compute_max_step_ms}};
+  return out;
+}
+
+Trajectory trajectory_from_json(const json& in) {
+  if (!in.is_object()) throw InputError("", "a trajectory must be a JSON object");
+  Trajectory tr;
+  auto format = in.find("format");
+  if (format == in.end() || !format->is_string() || *format != kTrajectoryFormat) {
+    throw InputError("format", "must be \"" + std::string(kTrajectoryFormat) + "\"");
+  }
+  tr.details = in;
+  for (const char* k : {"format", "planner", "label", "reason", "dt", "lane_width", "t", "ego",
+                        "others", "collision", "compute_ms"}) {
+    tr.details.erase(k);
+  }
+  detail::read_value(in.value("planner", json("")), "planner", tr.planner);
+  std::string label;
+  detail::read_value(in.value("label", json()), "label", label);
+  tr.label = label_from_string(label);
+  if (in.contains("reason")) detail::read_value(in["reason"], "reason", tr.reason);
+  detail::read_value(in.value("dt", json()), "dt", tr.dt);
+  tr.lane_width = 3.75;
+  if (in.contains("lane_width")) detail::read_value(in["lane_width"], "lane_width", tr.lane_width);
+  if (!in.contains("t") || !in["t"].is_array()) throw InputError("t", "must be an array");
+  const std::size_t n = in["t"].size();
+  tr.t = read_array(in, "", "t", n);
+  const json& ego = object_at(in, "", "ego");
+  const auto x = read_array(ego, "ego", "x", n), y = read_array(ego, "ego", "y", n),
+             v = read_array(ego, "ego", "v", n), th = read_array(ego, "ego", "theta", n),
+             a = read_array(ego, "ego", "a", n), w = read_array(ego, "ego", "omega", n);
+  for (std::size_t k = 0; k < n; ++k) {
+    tr.ego.push_back({x[k], y[k], v[k], th[k], a[k]});
+    tr.controls.push_back({a[k], w[k]});
+  }
+  const json& others = object_at(in, "", "others");
+  tr.others.dt = tr.dt;
+  for (Car c : kAllCars) {
+    const std::string name(to_string(c));
+    const json& car = object_at(others, "others", name.c_str());
+    auto& track = tr.others.cars[static_cast<std::size_t>(c)];
+    track.x = read_array(car, "others." + name, "x", n);
+    track.v = read_array(car, "others." + name, "v", n);
+    track.a.assign(n, 0.0);
+  }
+  if (in.contains("collision")) detail::read_value(in["collision"], "collision", tr.collision);
+  if (in.contains("compute_ms") && in["compute_ms"].is_object()) {
+    const json& ms = in["compute_ms"];
+    if (ms.contains("total")) detail::read_value(ms["total"], "compute_ms.total", tr.compute_total_ms);
+    if (ms.contains("max_step")) {
+      detail::read_value(ms["max_step"], "compute_ms.max_step", tr.compute_max_step_ms);
+    }
+  }
+  return tr;
+}
+
+Trajectory load_trajectory(const std::string& path) {
+  return trajectory_from_json(detail::read_json_file(path));
+}
+
+void save_trajectory(const Trajectory& trajectory, const std::string& path) {
+  const std::string text = trajectory_to_json(trajectory).dump() + "\n";
+  if (path.empty() || path == "-") {
+    std::cout << text;
+    return;
+  }
+  detail::write_file_atomically(path, text);
+}
+
+}  // namespace lanechange

@@ -1,0 +1,64 @@
+#include <gtest/gtest.h>
+
+#include <nlohmann/json.hpp>
+
+#include "lanechange/config.hpp"
+#include "lanechange/error.hpp"
+#include "test_helpers.hpp"
+
+namespace lanechange {
+namespace {
+
+TEST(Config, SaveAndLoadRoundTrip) {
+  testing::TempDir dir;
+  Config c = make_preset("authors");
+  c.expert.steps = 40;
+  c.safety.follower.time_headway = 1.25;
+  c.expert.lane_rule = LaneRule::EitherOr;
+  save_config(c, dir.file("c.json"));
+  const Config loaded = load_config(dir.file("c.json"));
+  EXPECT_EQ(nlohmann::json(loaded), nlohmann::json(c));
+  EXPECT_EQ(loaded.expert.steps, 40);
+  EXPECT_EQ(loaded.expert.lane_rule, LaneRule::EitherOr);
+}
+
+TEST(Config, PartialFileStartsFromItsPreset) {
+  const Config c = config_from_json(nlohmann::json::parse(
+      R"({"preset": "authors", "expert": {"max_iterations": 3}})"));
+  EXPECT_EQ(c.expert.max_iterations, 3);
+  EXPECT_EQ(c.expert.lane_rule, LaneRule::Footprint);  // from the authors preset
+  EXPECT_DOUBLE_EQ(c.safety.leader.time_headway, 3.0);
+}
+
+TEST(Config, PaperDefaultsFollowNotes) {
+  const Config c;
+  EXPECT_EQ(c.expert.steps, 50);
+  EXPECT_DOUBLE_EQ(c.expert.horizon, 5.0);
+  EXPECT_DOUBLE_EQ(c.dt(), 0.1);
+  EXPECT_DOUBLE_EQ(c.expert.weight_accel, 0.5);
+  EXPECT_DOUBLE_EQ(c.expert.weight_jerk, 100.0);
+  EXPECT_DOUBLE_EQ(c.expert.weight_lateral, 1.0);
+  EXPECT_EQ(c.expert.lane_rule, LaneRule::EitherOr);
+  EXPECT_DOUBLE_EQ(c.lane_width, 3.75);
+  EXPECT_NEAR(c.limits.v.hi, 60.0 / 3.6, 1e-12);
+}
+
+TEST(Config, RejectsUnknownKeysAndBadValuesByName) {
+  auto field_of = [](const char* text) {
+    try {
+      (void)config_from_json(nlohmann::json::parse(text));
+    } catch (const InputError& e) {
+      return e.field();
+    }
+    return std::string("<accepted>");
+  };
+  EXPECT_EQ(field_of(R"({"expert": {"stepz": 3}})"), "expert.stepz");
+  EXPECT_EQ(field_of(R"({"lane_width": -1})"), "lane_width");
+  EXPECT_EQ(field_of(R"({"limits": {"a": [2, -2]}})"), "limits.a");
+  EXPECT_EQ(field_of(R"({"expert": {"lane_rule": "sideways"}})"), "expert.lane_rule");
+  EXPECT_EQ(field_of(R"({"preset": "nobody"})"), "preset");
+  EXPECT_EQ(field_of(R"({"idm": {"max_accel": "fast"}})"), "idm.max_accel");
+}
+
+}  // namespace
+}  // namespace lanechange

@@ -1,0 +1,73 @@
+#pragma once
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "lanechange/config.hpp"
+#include "lanechange/scenario.hpp"
+
+namespace lanechange::testing {
+
+/// The example scenario of formats.md.
+inline nlohmann::json example_scenario_json() {
+  return nlohmann::json::parse(R"({
+    "format": "lanechange.scenario/1",
+    "lane_width": 3.5,
+    "behavior": "constant_speed",
+    "ego":      {"x": 0.0,   "y": 0.0, "v": 8.0, "theta": 0.0, "a": 0.0},
+    "leader":   {"x": 30.0,  "v": 7.0, "a": 0.0},
+    "follower": {"x": -12.0, "v": 9.0, "a": 0.0},
+    "target":   {"x": 20.0,  "v": 9.5, "a": 0.0}
+  })");
+}
+
+/// A fresh directory under the system temp dir, removed at destruction.
+class TempDir {
+ public:
+  TempDir() {
+    path_ = std::filesystem::temp_directory_path() /
+            ("lanechange_test_" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) +
+             "_" + ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    std::filesystem::remove_all(path_);
+    std::filesystem::create_directories(path_);
+  }
+  ~TempDir() { std::filesystem::remove_all(path_); }
+  [[nodiscard]] std::string file(const std::string& name) const { return (path_ / name).string(); }
+  [[nodiscard]] const std::filesystem::path& path() const { return path_; }
+
+ private:
+  std::filesystem::path path_;
+};
+
+inline void write_text(const std::string& path, const std::string& text) {
+  std::ofstream(path) << text;
+}
+
+inline std::string read_text(const std::string& path) {
+  std::ifstream in(path);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+struct CommandResult {
+  int exit_code = -1;
+  std::string output;  ///< stdout and stderr together
+};
+
+/// Runs the lanechange CLI with `args` (already shell-quoted).
+inline CommandResult run_cli(const std::string& args) {
+  const std::string command = std::string(LANECHANGE_CLI) + " " + args + " 2>&1";
+  CommandResult result;
+  FILE* pipe = ::popen(command.c_str(), "r");
+  if (pipe == nullptr) return result;
+  char buffer[4096];
+  while (std::fgets(buffer, sizeof buffer, pipe) != nullptr) result.output += buffer;
+  const int status = ::pclose(pipe);
+  result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return result;
+}
+
+}  // namespace lanechange::testing
