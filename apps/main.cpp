@@ -2,13 +2,17 @@
 // option) exits with code 2 and a message that names the problem; any other
 // error exits with 1.
 #include <CLI/CLI.hpp>
+#include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <iostream>
 #include <nlohmann/json.hpp>
 #include <optional>
 
 #include "lanechange/config.hpp"
 #include "lanechange/error.hpp"
+#include "lanechange/expert/crosscheck.hpp"
+#include "lanechange/expert/planner.hpp"
 #include "lanechange/sampler.hpp"
 #include "lanechange/scenario.hpp"
 
@@ -29,7 +33,8 @@ struct GlobalOptions {
 };
 
 void add_validate(CLI::App& app, const GlobalOptions& global) {
-  auto* cmd = app.add_subcommand("validate", "Check a scenario file and print it with all defaults");
+  auto* cmd =
+      app.add_subcommand("validate", "Check a scenario file and print it with all defaults");
   static std::string scenario_path;
   cmd->add_option("--scenario", scenario_path, "Scenario JSON file")->required();
   cmd->callback([&global] {
@@ -44,7 +49,9 @@ void add_sample(CLI::App& app, const GlobalOptions& global) {
   static std::uint64_t seed = 0;
   static std::string out_dir;
   static std::string behavior;
-  cmd->add_option("--count", count, "How many scenarios")->required()->check(CLI::Range(1LL, 100'000'000LL));
+  cmd->add_option("--count", count, "How many scenarios")
+      ->required()
+      ->check(CLI::Range(1LL, 100'000'000LL));
   cmd->add_option("--seed", seed, "Random seed")->required();
   cmd->add_option("--out", out_dir, "Output directory (created if missing)")->required();
   cmd->add_option("--behavior", behavior,
@@ -79,6 +86,93 @@ void add_config(CLI::App& app, const GlobalOptions& global) {
   });
 }
 
+void add_plan(CLI::App& app, const GlobalOptions& global) {
+  auto* cmd = app.add_subcommand("plan", "Plan once from the scenario's initial state");
+  static std::string scenario_path;
+  static std::string planner = "miqp";
+  static std::string solver = "fast";
+  static double time_limit = 60.0;
+  static std::string out_path = "-";
+  cmd->add_option("--scenario", scenario_path, "Scenario JSON file")->required();
+  cmd->add_option("--planner", planner, "Planner: miqp (mlp-miqp, mpc, dwa: not built yet)");
+  cmd->add_option("--solver", solver, "MIQP back-end: fast (ours) or reference (Bonmin B-BB)");
+  cmd->add_option("--time-limit", time_limit, "Seconds for the whole plan")
+      ->check(CLI::PositiveNumber);
+  cmd->add_option("--out", out_path, "Trajectory JSON file, or - for standard output");
+  cmd->callback([&global] {
+    if (planner != "miqp") {
+      throw lc::InputError("--planner",
+                           "planner \"" + planner + "\" is not available yet (miqp is)");
+    }
+    const lc::Config config = global.config();
+    const lc::Scenario scenario = lc::load_scenario(scenario_path, config);
+    const lc::expert::ExpertPlanner expert(
+        config, lc::expert::make_lane_change_solver(solver, config.expert.big_m));
+    const auto result = expert.plan(scenario, {time_limit});
+    const lc::Trajectory trajectory = expert.to_trajectory(result, scenario);
+    lc::save_trajectory(trajectory, out_path);
+    std::cerr << "label " << lc::to_string(trajectory.label) << ", "
+              << lc::expert::to_string(result.status) << " after " << result.iterations()
+              << " rounds, objective " << result.objective << ", " << result.total_ms << " ms"
+              << (trajectory.reason.empty() ? "" : " (" + trajectory.reason + ")") << "\n";
+  });
+}
+
+void add_crosscheck(CLI::App& app, const GlobalOptions& global) {
+  auto* cmd = app.add_subcommand(
+      "crosscheck", "Solve the same linearized MIQPs with the fast and the reference solver");
+  static long long count = 20;
+  static long long first = 0;
+  static std::uint64_t seed = 1;
+  static int steps = 0;
+  static double tolerance = 1e-6;
+  static std::string out_path;
+  cmd->add_option("--count", count, "How many sampled scenarios")->check(CLI::Range(1LL, 100000LL));
+  cmd->add_option("--seed", seed, "Sampler seed");
+  cmd->add_option("--first", first, "Index of the first scenario");
+  cmd->add_option("--steps", steps, "Override N (fewer steps make the reference faster)");
+  cmd->add_option("--tolerance", tolerance, "Largest relative objective difference");
+  cmd->add_option("--out", out_path, "JSON lines file, one case per line");
+  cmd->callback([&global] {
+    lc::Config config = global.config();
+    if (steps > 0) config.expert.steps = steps;
+    const lc::ScenarioSampler sampler(config, seed);
+    const lc::expert::FastLaneChangeSolver fast;
+    const lc::expert::ReferenceLaneChangeSolver reference(config.expert.big_m);
+    std::ofstream out;
+    if (!out_path.empty()) out.open(out_path);
+    long long agreed = 0;
+    for (long long i = first; i < first + count; ++i) {
+      const lc::Scenario scenario = sampler.sample(static_cast<std::uint64_t>(i));
+      const auto qp = lc::expert::first_round_problem(scenario, config);
+      auto c = lc::expert::cross_check(qp, fast, reference, {}, tolerance);
+      c.index = static_cast<std::uint64_t>(i);
+      c.behavior = std::string(lc::to_string(scenario.behavior));
+      agreed += c.agree ? 1 : 0;
+      nlohmann::json row = {
+          {"index", c.index},
+          {"behavior", c.behavior},
+          {"fast_status", lc::expert::to_string(c.fast_status)},
+          {"reference_status", lc::expert::to_string(c.reference_status)},
+          {"fast_objective",
+           std::isfinite(c.fast_objective) ? nlohmann::json(c.fast_objective) : nlohmann::json()},
+          {"reference_objective", std::isfinite(c.reference_objective)
+                                      ? nlohmann::json(c.reference_objective)
+                                      : nlohmann::json()},
+          {"relative_difference", c.relative_difference},
+          {"fast_ms", c.fast_ms},
+          {"reference_ms", c.reference_ms},
+          {"fast_nodes", c.fast_nodes},
+          {"reference_nodes", c.reference_nodes},
+          {"agree", c.agree}};
+      if (out.is_open()) out << row.dump() << std::endl;
+      std::cerr << row.dump() << "\n";
+    }
+    std::cout << agreed << " of " << count << " agree\n";
+    if (agreed != count) throw std::runtime_error("the solvers disagree");
+  });
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -91,6 +185,8 @@ int main(int argc, char** argv) {
   add_validate(app, global);
   add_sample(app, global);
   add_config(app, global);
+  add_plan(app, global);
+  add_crosscheck(app, global);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {

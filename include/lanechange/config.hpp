@@ -22,8 +22,8 @@ struct Interval {
 
 /// The ego's limits. Defaults from the authors' code (NOTES.md).
 struct Limits {
-  Interval v{0.0, 60.0 / 3.6};                        ///< m/s
-  Interval a{-6.0, 6.0};                              ///< m/s^2
+  Interval v{0.0, 60.0 / 3.6};                                ///< m/s
+  Interval a{-6.0, 6.0};                                      ///< m/s^2
   Interval omega{-0.26179938779914941, 0.26179938779914941};  ///< rad/s, 15 deg/s
   double lateral_margin = 3.75 / 15.0;  ///< m; y stays in [-margin, w + margin]
 };
@@ -48,7 +48,7 @@ struct SafeDistance {
 };
 
 struct SafetyMargins {
-  SafeDistance leader{8.4, 0.5};    ///< car length + 4 m, plus half a second
+  SafeDistance leader{8.4, 0.5};  ///< car length + 4 m, plus half a second
   SafeDistance follower{8.4, 0.5};
   SafeDistance target{8.4, 0.5};
 };
@@ -63,24 +63,56 @@ enum class JerkWeighting {
   Difference,  ///< c2 * (a_{k+1} - a_k)^2 summed times dt, as the authors' code
 };
 
+enum class WarmStart {
+  Quintic,  ///< the paper's quintic in x and y, aimed behind the target (NOTES.md)
+  Authors,  ///< the authors' code: x = v0 t, quintic y, v linear to the target's speed
+};
+
+/// How the traffic models integrate a step. The authors' prediction uses Euler.
+enum class TrafficIntegration {
+  Ballistic,  ///< x += v dt + a dt^2 / 2 (Treiber and Kesting's scheme)
+  Euler,      ///< x += v dt
+};
+
 struct ExpertSettings {
-  double horizon = 5.0;  ///< t_f, s
-  int steps = 50;        ///< N
-  double weight_accel = 0.5;    ///< c1
-  double weight_jerk = 100.0;   ///< c2
-  double weight_lateral = 1.0;  ///< c3
+  double horizon = 5.0;            ///< t_f, s
+  int steps = 50;                  ///< N
+  double weight_accel = 0.5;       ///< c1
+  double weight_jerk = 100.0;      ///< c2
+  double weight_lateral = 1.0;     ///< c3
   double weight_terminal_x = 0.0;  ///< pull of x_N towards the aim point (authors: 0.005)
   JerkWeighting jerk_weighting = JerkWeighting::Derivative;
   LaneRule lane_rule = LaneRule::EitherOr;
-  int max_iterations = 10;          ///< linearization rounds
-  double convergence_tolerance = 0.1;  ///< m, largest change of x and y between rounds
-  double big_m = 1000.0;  ///< m; must exceed any distance a lane constraint relaxes
+  int max_iterations = 10;              ///< linearization rounds
+  double convergence_tolerance = 0.1;   ///< m, largest change of x and y between rounds
+  double big_m = 1000.0;                ///< m; must exceed any distance a lane constraint relaxes
+  bool fix_terminal_lateral = true;     ///< y(t_f) = w as a constraint (authors' code)
+  bool constrain_initial_node = false;  ///< apply the lane rules at t = 0 too (authors' code)
+  /// Node k is checked against the other cars' prediction at node k + this
+  /// (the authors' code has an off-by-one of 1).
+  int prediction_lead_steps = 0;
+  WarmStart warm_start = WarmStart::Quintic;
+  /// Where the warm start and the terminal-x term aim: behind the target by
+  /// its safe distance (NOTES.md), or at the target itself (authors' code).
+  bool aim_behind_target = true;
+};
+
+/// What a drop of y is measured from, for "y never decreases".
+enum class ReversalReference {
+  /// The running maximum of y, capped at the target-lane centre: the ego may
+  /// overshoot the centre and settle back (lane keeping), but must not move
+  /// back towards its old lane, before or after reaching the centre.
+  TargetCenter,
+  /// The running maximum of y itself: the paper's words taken literally, so
+  /// any settling after an overshoot counts.
+  RunningMax,
 };
 
 /// The labeller of NOTES.md (Sec. III of the paper).
 struct LabelTolerances {
-  double reach = 0.25;           ///< m: |y(t_f) - w| within this counts as reaching the TL
-  double reversal = 0.10;        ///< m: a drop of y below its running maximum beyond this is a reversal
+  double reach = 0.25;     ///< m: |y(t_f) - w| within this counts as reaching the TL
+  double reversal = 0.10;  ///< m: a larger drop of y (see reference) is a reversal
+  ReversalReference reference = ReversalReference::TargetCenter;
   double max_final_heading = 0.17453292519943295;  ///< rad, 10 deg
 };
 
@@ -90,10 +122,10 @@ struct SamplerSettings {
   Interval follower_speed{20.0 / 3.6, 40.0 / 3.6};  ///< vehicle 2, m/s
   Interval target_speed{20.0 / 3.6, 40.0 / 3.6};    ///< vehicle 3, m/s
   Interval ego_speed_ratio{0.9, 1.1};               ///< ego speed / leader speed
-  Interval leader_headway{3.0, 5.0};  ///< s: the ego's time gap to the leader (>= 3 s rule)
+  Interval leader_headway{3.0, 5.0};      ///< s: the ego's time gap to the leader (>= 3 s rule)
   Interval follower_offset{-40.0, 10.0};  ///< m: follower centre relative to the ego
-  Interval gap_length{1.0, 50.0};  ///< m: free space between follower and target bumpers
-  Interval accel{-1.0, 1.0};       ///< m/s^2, for constant_accel
+  Interval gap_length{1.0, 50.0};         ///< m: free space between follower and target bumpers
+  Interval accel{-1.0, 1.0};              ///< m/s^2, for constant_accel
 };
 
 struct Config {
@@ -103,6 +135,7 @@ struct Config {
   Limits limits;
   IdmParameters idm;
   double traffic_max_speed = 60.0 / 3.6;  ///< m/s: constant-accel cars stay in [0, this]
+  TrafficIntegration traffic_integration = TrafficIntegration::Ballistic;
   SafetyMargins safety;
   ExpertSettings expert;
   LabelTolerances labels;

@@ -52,6 +52,7 @@ class TrafficModel {
   VehicleSize vehicle_;
   IdmParameters idm_;
   double v_max_;
+  TrafficIntegration integration_;
   std::array<CarState, 3> cars_;
   double time_ = 0.0;
 };
@@ -76,8 +77,8 @@ struct TrafficPrediction {
 /// least steps + 1 of them) lets the cars react to the ego's planned motion;
 /// without it the ego is taken to hold its initial lateral position at its
 /// initial speed.
-[[nodiscard]] TrafficPrediction predict_traffic(const Scenario& scenario, const Config& config,
-                                                int steps, double dt,
-                                                const std::vector<EgoFootprint>* ego_path = nullptr);
+[[nodiscard]] TrafficPrediction predict_traffic(
+    const Scenario& scenario, const Config& config, int steps, double dt,
+    const std::vector<EgoFootprint>* ego_path = nullptr);
 
 }  // namespace lanechange

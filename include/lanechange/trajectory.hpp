@@ -19,9 +19,9 @@ struct Trajectory {
   std::string reason;  ///< why the label; empty for well-posed
   double dt = 0.0;
   std::vector<double> t;
-  std::vector<EgoState> ego;          ///< one per node; ego[k].a is applied from t[k]
-  std::vector<EgoControl> controls;   ///< one per node; the last repeats the one before
-  TrafficPrediction others;           ///< predicted (plan) or simulated (rollout)
+  std::vector<EgoState> ego;         ///< one per node; ego[k].a is applied from t[k]
+  std::vector<EgoControl> controls;  ///< one per node; the last repeats the one before
+  TrafficPrediction others;          ///< predicted (plan) or simulated (rollout)
   bool collision = false;
   double compute_total_ms = 0.0;
   double compute_max_step_ms = 0.0;

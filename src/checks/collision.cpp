@@ -10,8 +10,8 @@ double lerp(double a, double b, double s) { return a + s * (b - a); }
 }  // namespace
 
 std::optional<Collision> first_collision(std::span<const EgoState> ego,
-                                         const TrafficPrediction& others,
-                                         const Scenario& scenario, int substeps) {
+                                         const TrafficPrediction& others, const Scenario& scenario,
+                                         int substeps) {
   const int nodes = std::min(static_cast<int>(ego.size()), others.nodes());
   const double length = scenario.vehicle.length;
   const double width = scenario.vehicle.width;

@@ -24,11 +24,11 @@ Label label_from_string(std::string_view name) {
                                 "\" (expected well_posed, ill_posed or failure)");
 }
 
-double largest_lateral_reversal(std::span<const double> y) {
+double largest_lateral_reversal(std::span<const double> y, double cap) {
   double running_max = -INFINITY;
   double largest = 0.0;
   for (double value : y) {
-    running_max = std::max(running_max, value);
+    running_max = std::min(std::max(running_max, value), cap);
     largest = std::max(largest, running_max - value);
   }
   return largest;
@@ -49,19 +49,22 @@ Labelled label_trajectory(std::span<const double> y, double final_theta, double 
   if (y.empty()) return {Label::Failure, "empty trajectory"};
   const double miss = std::abs(y.back() - lane_width);
   if (!(miss <= tol.reach)) {
-    return {Label::Failure,
-            format("did not reach the target lane: |y(t_f) - w| = %.3f m > %.3f m", miss, tol.reach)};
+    return {Label::Failure, format("did not reach the target lane: |y(t_f) - w| = %.3f m > %.3f m",
+                                   miss, tol.reach)};
   }
-  const double reversal = largest_lateral_reversal(y);
+  const double cap = tol.reference == ReversalReference::TargetCenter ? lane_width : INFINITY;
+  const double reversal = largest_lateral_reversal(y, cap);
   if (reversal > tol.reversal) {
     return {Label::IllPosed,
-            format("y drops %.3f m below its running maximum (tolerance %.3f m)", reversal,
-                   tol.reversal)};
+            format(tol.reference == ReversalReference::TargetCenter
+                       ? "y moves back %.3f m towards the ego lane (tolerance %.3f m)"
+                       : "y drops %.3f m below its running maximum (tolerance %.3f m)",
+                   reversal, tol.reversal)};
   }
   if (!(std::abs(final_theta) <= tol.max_final_heading)) {
-    return {Label::IllPosed, format("|theta(t_f)| = %.2f deg exceeds %.2f deg",
-                                    std::abs(final_theta) * 180.0 / M_PI,
-                                    tol.max_final_heading * 180.0 / M_PI)};
+    return {Label::IllPosed,
+            format("|theta(t_f)| = %.2f deg exceeds %.2f deg", std::abs(final_theta) * 180.0 / M_PI,
+                   tol.max_final_heading * 180.0 / M_PI)};
   }
   return {Label::WellPosed, ""};
 }

@@ -42,6 +42,8 @@ void Config::validate() const {
   require(expert.max_iterations >= 1, "expert.max_iterations", "must be at least 1");
   require(expert.convergence_tolerance > 0, "expert.convergence_tolerance", "must be positive");
   require(expert.big_m > 0, "expert.big_m", "must be positive");
+  require(expert.prediction_lead_steps >= 0 && expert.prediction_lead_steps <= 10,
+          "expert.prediction_lead_steps", "must be in [0, 10]");
   require(labels.reach > 0, "labels.reach", "must be positive");
   require(labels.reversal >= 0, "labels.reversal", "must not be negative");
   require(labels.max_final_heading > 0, "labels.max_final_heading", "must be positive");
@@ -66,6 +68,11 @@ Config authors_preset() {
   c.expert.weight_terminal_x = 0.005;
   c.expert.jerk_weighting = JerkWeighting::Difference;
   c.expert.lane_rule = LaneRule::Footprint;
+  c.expert.constrain_initial_node = true;
+  c.expert.prediction_lead_steps = 1;
+  c.expert.warm_start = WarmStart::Authors;
+  c.expert.aim_behind_target = false;
+  c.traffic_integration = TrafficIntegration::Euler;
   c.sampler.target_speed = {20.0 / 3.6, 40.0 / 3.6};
   return c;
 }
@@ -77,7 +84,8 @@ std::vector<std::string> preset_names() { return {"paper", "authors"}; }
 Config make_preset(std::string_view name) {
   if (name == "paper") return Config{};
   if (name == "authors") return authors_preset();
-  throw InputError("preset", "unknown preset \"" + std::string(name) + "\" (expected paper or authors)");
+  throw InputError("preset",
+                   "unknown preset \"" + std::string(name) + "\" (expected paper or authors)");
 }
 
 void to_json(nlohmann::json& out, const Config& config) { out = detail::write_value(config); }
@@ -92,7 +100,9 @@ Config config_from_json(const nlohmann::json& in) {
   return config;
 }
 
-Config load_config(const std::string& path) { return config_from_json(detail::read_json_file(path)); }
+Config load_config(const std::string& path) {
+  return config_from_json(detail::read_json_file(path));
+}
 
 void save_config(const Config& config, const std::string& path) {
   detail::write_file_atomically(path, detail::write_value(config).dump(2) + "\n");

@@ -9,7 +9,6 @@
 
 namespace lanechange {
 
-
 inline constexpr std::array<detail::EnumName<LaneRule>, 2> enum_names(LaneRule) {
   return {{{LaneRule::EitherOr, "either_or"}, {LaneRule::Footprint, "footprint"}}};
 }
@@ -18,18 +17,28 @@ inline constexpr std::array<detail::EnumName<JerkWeighting>, 2> enum_names(JerkW
   return {{{JerkWeighting::Derivative, "derivative"}, {JerkWeighting::Difference, "difference"}}};
 }
 
+inline constexpr std::array<detail::EnumName<WarmStart>, 2> enum_names(WarmStart) {
+  return {{{WarmStart::Quintic, "quintic"}, {WarmStart::Authors, "authors"}}};
+}
+
+inline constexpr std::array<detail::EnumName<TrafficIntegration>, 2> enum_names(
+    TrafficIntegration) {
+  return {{{TrafficIntegration::Ballistic, "ballistic"}, {TrafficIntegration::Euler, "euler"}}};
+}
+
+inline constexpr std::array<detail::EnumName<ReversalReference>, 2> enum_names(ReversalReference) {
+  return {{{ReversalReference::TargetCenter, "target_center"},
+           {ReversalReference::RunningMax, "running_max"}}};
+}
+
 template <class V, class S>
-void visit_fields(V& v, S& s)
-  requires std::same_as<std::remove_const_t<S>, VehicleSize>
-{
+void visit_fields(V& v, S& s) requires std::same_as<std::remove_const_t<S>, VehicleSize> {
   v("length", s.length);
   v("width", s.width);
 }
 
 template <class V, class S>
-void visit_fields(V& v, S& s)
-  requires std::same_as<std::remove_const_t<S>, Limits>
-{
+void visit_fields(V& v, S& s) requires std::same_as<std::remove_const_t<S>, Limits> {
   v("v", s.v);
   v("a", s.a);
   v("omega", s.omega);
@@ -37,9 +46,7 @@ void visit_fields(V& v, S& s)
 }
 
 template <class V, class S>
-void visit_fields(V& v, S& s)
-  requires std::same_as<std::remove_const_t<S>, IdmParameters>
-{
+void visit_fields(V& v, S& s) requires std::same_as<std::remove_const_t<S>, IdmParameters> {
   v("desired_speed", s.desired_speed);
   v("time_headway", s.time_headway);
   v("min_gap", s.min_gap);
@@ -49,26 +56,20 @@ void visit_fields(V& v, S& s)
 }
 
 template <class V, class S>
-void visit_fields(V& v, S& s)
-  requires std::same_as<std::remove_const_t<S>, SafeDistance>
-{
+void visit_fields(V& v, S& s) requires std::same_as<std::remove_const_t<S>, SafeDistance> {
   v("standstill", s.standstill);
   v("time_headway", s.time_headway);
 }
 
 template <class V, class S>
-void visit_fields(V& v, S& s)
-  requires std::same_as<std::remove_const_t<S>, SafetyMargins>
-{
+void visit_fields(V& v, S& s) requires std::same_as<std::remove_const_t<S>, SafetyMargins> {
   v("leader", s.leader);
   v("follower", s.follower);
   v("target", s.target);
 }
 
 template <class V, class S>
-void visit_fields(V& v, S& s)
-  requires std::same_as<std::remove_const_t<S>, ExpertSettings>
-{
+void visit_fields(V& v, S& s) requires std::same_as<std::remove_const_t<S>, ExpertSettings> {
   v("horizon", s.horizon);
   v("steps", s.steps);
   v("weight_accel", s.weight_accel);
@@ -80,21 +81,23 @@ void visit_fields(V& v, S& s)
   v("max_iterations", s.max_iterations);
   v("convergence_tolerance", s.convergence_tolerance);
   v("big_m", s.big_m);
+  v("fix_terminal_lateral", s.fix_terminal_lateral);
+  v("constrain_initial_node", s.constrain_initial_node);
+  v("prediction_lead_steps", s.prediction_lead_steps);
+  v("warm_start", s.warm_start);
+  v("aim_behind_target", s.aim_behind_target);
 }
 
 template <class V, class S>
-void visit_fields(V& v, S& s)
-  requires std::same_as<std::remove_const_t<S>, LabelTolerances>
-{
+void visit_fields(V& v, S& s) requires std::same_as<std::remove_const_t<S>, LabelTolerances> {
   v("reach", s.reach);
   v("reversal", s.reversal);
+  v("reference", s.reference);
   v("max_final_heading", s.max_final_heading);
 }
 
 template <class V, class S>
-void visit_fields(V& v, S& s)
-  requires std::same_as<std::remove_const_t<S>, SamplerSettings>
-{
+void visit_fields(V& v, S& s) requires std::same_as<std::remove_const_t<S>, SamplerSettings> {
   v("leader_speed", s.leader_speed);
   v("follower_speed", s.follower_speed);
   v("target_speed", s.target_speed);
@@ -106,15 +109,14 @@ void visit_fields(V& v, S& s)
 }
 
 template <class V, class S>
-void visit_fields(V& v, S& s)
-  requires std::same_as<std::remove_const_t<S>, Config>
-{
+void visit_fields(V& v, S& s) requires std::same_as<std::remove_const_t<S>, Config> {
   v("preset", s.preset);
   v("lane_width", s.lane_width);
   v("vehicle", s.vehicle);
   v("limits", s.limits);
   v("idm", s.idm);
   v("traffic_max_speed", s.traffic_max_speed);
+  v("traffic_integration", s.traffic_integration);
   v("safety", s.safety);
   v("expert", s.expert);
   v("labels", s.labels);

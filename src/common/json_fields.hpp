@@ -28,10 +28,14 @@ struct FieldReader;
 struct FieldWriter;
 
 template <class T>
-concept FieldStruct = requires(FieldWriter& w, const T& t) { visit_fields(w, t); };
+concept FieldStruct = requires(FieldWriter& w, const T& t) {
+  visit_fields(w, t);
+};
 
 template <class T>
-concept NamedEnum = std::is_enum_v<T> && requires(T t) { enum_names(t); };
+concept NamedEnum = std::is_enum_v<T> && requires(T t) {
+  enum_names(t);
+};
 
 inline std::string join_path(const std::string& path, const std::string& key) {
   return path.empty() ? key : path + "." + key;
@@ -99,12 +103,14 @@ struct FieldReader {
   template <class T>
   void operator()(const char* name, T& value) {
     known.insert(name);
-    if (auto it = object.find(name); it != object.end()) read_value(*it, join_path(path, name), value);
+    if (auto it = object.find(name); it != object.end())
+      read_value(*it, join_path(path, name), value);
   }
 
   void reject_unknown_keys() const {
     for (const auto& item : object.items()) {
-      if (!known.contains(item.key())) throw InputError(join_path(path, item.key()), "unknown field");
+      if (!known.contains(item.key()))
+        throw InputError(join_path(path, item.key()), "unknown field");
     }
   }
 };

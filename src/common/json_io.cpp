@@ -1,9 +1,9 @@
+#include <unistd.h>
+
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
-#include <unistd.h>
-
 #include <vector>
 
 #include "common/json_fields.hpp"

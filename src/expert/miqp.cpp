@@ -64,8 +64,8 @@ std::string check_sizes(const MiqpProblem& problem) {
     message << "hessian is " << problem.hessian.rows() << 'x' << problem.hessian.cols()
             << " but there are " << n << " variables";
   } else if (problem.constraints.rows() != m || problem.constraints.cols() != n) {
-    message << "constraints is " << problem.constraints.rows() << 'x'
-            << problem.constraints.cols() << " but expected " << m << 'x' << n;
+    message << "constraints is " << problem.constraints.rows() << 'x' << problem.constraints.cols()
+            << " but expected " << m << 'x' << n;
   } else if (problem.row_upper.size() != m) {
     message << "row_upper has " << problem.row_upper.size() << " entries, row_lower " << m;
   } else if (problem.col_lower.size() != n || problem.col_upper.size() != n) {
@@ -84,8 +84,7 @@ std::string check_values(const MiqpProblem& problem) {
   if (!all_finite(problem.hessian)) return "hessian has a non-finite entry";
   if (!all_finite(problem.constraints)) return "constraints has a non-finite entry";
   if (!is_symmetric(problem.hessian)) return "hessian is not symmetric";
-  if (auto message = check_bounds(problem.row_lower, problem.row_upper, "row");
-      !message.empty()) {
+  if (auto message = check_bounds(problem.row_lower, problem.row_upper, "row"); !message.empty()) {
     return message;
   }
   return check_bounds(problem.col_lower, problem.col_upper, "column");
@@ -115,7 +114,8 @@ double MiqpProblem::max_violation(const Eigen::VectorXd& x) const {
   double violation = 0.0;
   const Eigen::VectorXd row_activity = constraints * x;
   for (Eigen::Index i = 0; i < row_activity.size(); ++i) {
-    violation = std::max(violation, interval_violation(row_activity[i], row_lower[i], row_upper[i]));
+    violation =
+        std::max(violation, interval_violation(row_activity[i], row_lower[i], row_upper[i]));
   }
   for (Eigen::Index j = 0; j < n; ++j) {
     violation = std::max(violation, interval_violation(x[j], col_lower[j], col_upper[j]));
@@ -133,18 +133,12 @@ std::string MiqpProblem::check() const {
 
 std::string_view to_string(MiqpStatus status) {
   switch (status) {
-    case MiqpStatus::Optimal:
-      return "Optimal";
-    case MiqpStatus::Infeasible:
-      return "Infeasible";
-    case MiqpStatus::TimeLimit:
-      return "TimeLimit";
-    case MiqpStatus::NodeLimit:
-      return "NodeLimit";
-    case MiqpStatus::NumericalError:
-      return "NumericalError";
-    case MiqpStatus::InvalidProblem:
-      return "InvalidProblem";
+    case MiqpStatus::Optimal: return "Optimal";
+    case MiqpStatus::Infeasible: return "Infeasible";
+    case MiqpStatus::TimeLimit: return "TimeLimit";
+    case MiqpStatus::NodeLimit: return "NodeLimit";
+    case MiqpStatus::NumericalError: return "NumericalError";
+    case MiqpStatus::InvalidProblem: return "InvalidProblem";
   }
   return "Unknown";
 }

@@ -1,8 +1,8 @@
+#include "lanechange/geometry.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
-
-#include "lanechange/geometry.hpp"
 
 namespace lanechange {
 namespace {

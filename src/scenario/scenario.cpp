@@ -71,8 +71,8 @@ const json& required(const json& object, const std::string& path, const char* ke
   return *it;
 }
 
-double read_number(const json& object, const std::string& path, const char* key,
-                   bool is_required, double fallback) {
+double read_number(const json& object, const std::string& path, const char* key, bool is_required,
+                   double fallback) {
   auto it = object.find(key);
   if (it == object.end()) {
     if (is_required) throw InputError(detail::join_path(path, key), "missing required field");
@@ -137,9 +137,11 @@ json write_safe_distance(const SafeDistance& d) {
 }
 
 void read_optional_fields(const json& root, Scenario& s) {
-  if (auto it = root.find("horizon"); it != root.end()) detail::read_value(*it, "horizon", s.horizon);
+  if (auto it = root.find("horizon"); it != root.end())
+    detail::read_value(*it, "horizon", s.horizon);
   if (auto it = root.find("steps"); it != root.end()) detail::read_value(*it, "steps", s.steps);
-  if (auto it = root.find("vehicle"); it != root.end()) detail::read_value(*it, "vehicle", s.vehicle);
+  if (auto it = root.find("vehicle"); it != root.end())
+    detail::read_value(*it, "vehicle", s.vehicle);
   if (auto it = root.find("idm"); it != root.end()) detail::read_value(*it, "idm", s.idm);
   if (auto it = root.find("limits"); it != root.end()) detail::read_value(*it, "limits", s.limits);
   if (auto it = root.find("safe_distance"); it != root.end()) {
@@ -231,8 +233,8 @@ json scenario_to_json(const Scenario& s) {
   out["format"] = kScenarioFormat;
   out["lane_width"] = s.lane_width;
   out["behavior"] = to_string(s.behavior);
-  out["ego"] = {{"x", s.ego.x}, {"y", s.ego.y}, {"v", s.ego.v}, {"theta", s.ego.theta},
-                {"a", s.ego.a}};
+  out["ego"] = {
+      {"x", s.ego.x}, {"y", s.ego.y}, {"v", s.ego.v}, {"theta", s.ego.theta}, {"a", s.ego.a}};
   out["leader"] = car_to_json(s.leader);
   out["follower"] = car_to_json(s.follower);
   out["target"] = car_to_json(s.target);

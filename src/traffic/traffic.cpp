@@ -12,8 +12,9 @@ double idm_acceleration(const IdmParameters& p, double v, double gap, double lea
   // A car that touches its leader brakes as hard as the model can; a tiny
   // floor keeps the ratio finite.
   const double safe_gap = std::max(gap, 1e-3);
-  const double dynamic = v * p.time_headway +
-                         v * (v - leader_speed) / (2.0 * std::sqrt(p.max_accel * p.comfortable_decel));
+  const double dynamic =
+      v * p.time_headway +
+      v * (v - leader_speed) / (2.0 * std::sqrt(p.max_accel * p.comfortable_decel));
   const double desired_gap = p.min_gap + std::max(0.0, dynamic);
   const double ratio = desired_gap / safe_gap;
   return p.max_accel * (free_road - ratio * ratio);
@@ -48,6 +49,7 @@ TrafficModel::TrafficModel(const Scenario& scenario, const Config& config)
       vehicle_(scenario.vehicle),
       idm_(scenario.idm),
       v_max_(config.traffic_max_speed),
+      integration_(config.traffic_integration),
       cars_{scenario.leader, scenario.follower, scenario.target} {
   if (behavior_ == Behavior::ConstantSpeed) {
     for (auto& c : cars_) c.a = 0.0;
@@ -85,7 +87,10 @@ void TrafficModel::step(double dt, const EgoFootprint& ego) {
   for (auto& c : cars_) {
     if (behavior_ == Behavior::Idm) {
       // Ballistic update with a stop instead of reversing (Treiber and Kesting).
-      if (c.v + c.a * dt < 0.0) {
+      if (integration_ == TrafficIntegration::Euler) {
+        c.x += c.v * dt;
+        c.v = std::max(0.0, c.v + c.a * dt);
+      } else if (c.v + c.a * dt < 0.0) {
         c.x += c.v * c.v / (2.0 * std::max(-c.a, 1e-9));
         c.v = 0.0;
       } else {

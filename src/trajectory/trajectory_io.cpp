@@ -146,7 +146,8 @@ Trajectory trajectory_from_json(const json& in) {
   if (in.contains("collision")) detail::read_value(in["collision"], "collision", tr.collision);
   if (in.contains("compute_ms") && in["compute_ms"].is_object()) {
     const json& ms = in["compute_ms"];
-    if (ms.contains("total")) detail::read_value(ms["total"], "compute_ms.total", tr.compute_total_ms);
+    if (ms.contains("total"))
+      detail::read_value(ms["total"], "compute_ms.total", tr.compute_total_ms);
     if (ms.contains("max_step")) {
       detail::read_value(ms["max_step"], "compute_ms.max_step", tr.compute_max_step_ms);
     }

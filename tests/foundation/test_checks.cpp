@@ -37,15 +37,33 @@ TEST(Labeller, RippleWithinToleranceIsWellPosedButAReversalIsNot) {
   back[45] = kW - 0.5;  // swerves half a metre back towards its old lane
   const Labelled l = label_trajectory(back, 0.0, kW, LabelTolerances{});
   EXPECT_EQ(l.label, Label::IllPosed);
-  EXPECT_NE(l.reason.find("drops"), std::string::npos);
+  EXPECT_NE(l.reason.find("back"), std::string::npos);
   EXPECT_NEAR(largest_lateral_reversal(back), back[44] - back[45], 1e-12);
 }
 
+TEST(Labeller, OvershootThatSettlesOnTheCentreIsNotAReversal) {
+  // 30 cm past the lane centre, then back onto it: lane keeping, not a
+  // move back towards the old lane, unless the literal reading is asked for.
+  std::vector<double> y = smooth_lane_change();
+  for (int k = 30; k <= 40; ++k) y[k] = kW + 0.3 * std::sin(std::numbers::pi * (k - 30) / 10.0);
+  for (int k = 41; k <= 50; ++k) y[k] = kW;
+  EXPECT_EQ(label_trajectory(y, 0.0, kW, LabelTolerances{}).label, Label::WellPosed);
+  EXPECT_NEAR(largest_lateral_reversal(y, kW), 0.0, 1e-12);
+  LabelTolerances literal;
+  literal.reference = ReversalReference::RunningMax;
+  EXPECT_EQ(label_trajectory(y, 0.0, kW, literal).label, Label::IllPosed);
+  // Dropping below the centre after the overshoot still counts.
+  y[45] = kW - 0.2;
+  EXPECT_EQ(label_trajectory(y, 0.0, kW, LabelTolerances{}).label, Label::IllPosed);
+}
+
 TEST(Labeller, LargeFinalHeadingIsIllPosed) {
-  const Labelled l = label_trajectory(smooth_lane_change(), 11.0 * M_PI / 180.0, kW, LabelTolerances{});
+  const Labelled l =
+      label_trajectory(smooth_lane_change(), 11.0 * M_PI / 180.0, kW, LabelTolerances{});
   EXPECT_EQ(l.label, Label::IllPosed);
-  EXPECT_EQ(label_trajectory(smooth_lane_change(), -9.0 * M_PI / 180.0, kW, LabelTolerances{}).label,
-            Label::WellPosed);
+  EXPECT_EQ(
+      label_trajectory(smooth_lane_change(), -9.0 * M_PI / 180.0, kW, LabelTolerances{}).label,
+      Label::WellPosed);
 }
 
 TEST(Labeller, NotReachingTheTargetLaneIsFailure) {

@@ -60,8 +60,8 @@ TEST(Cli, EveryBadInputClassExitsWithTwoAndNamesTheProblem) {
   for (const auto& [text, expected] : cases) {
     const auto r = validate_text(dir, text);
     EXPECT_EQ(r.exit_code, 2) << text << "\n" << r.output;
-    EXPECT_NE(r.output.find(expected), std::string::npos) << "expected '" << expected
-                                                          << "' in: " << r.output;
+    EXPECT_NE(r.output.find(expected), std::string::npos)
+        << "expected '" << expected << "' in: " << r.output;
   }
   const auto no_file = run_cli("validate --scenario " + dir.file("absent.json"));
   EXPECT_EQ(no_file.exit_code, 2);
@@ -101,8 +101,10 @@ TEST(Cli, BadConfigLeavesWrittenFilesIntact) {
   EXPECT_NE(r.output.find("expert.steps"), std::string::npos) << r.output;
   EXPECT_EQ(testing::read_text(saved), before);
   const std::string out_dir = (dir.path() / "none").string();
-  EXPECT_EQ(run_cli("--config " + dir.file("bad.json") + " sample --count 2 --seed 1 --out " +
-                    out_dir).exit_code, 2);
+  EXPECT_EQ(
+      run_cli("--config " + dir.file("bad.json") + " sample --count 2 --seed 1 --out " + out_dir)
+          .exit_code,
+      2);
   EXPECT_FALSE(std::filesystem::exists(out_dir));
 }
 

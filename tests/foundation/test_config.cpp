@@ -23,8 +23,8 @@ TEST(Config, SaveAndLoadRoundTrip) {
 }
 
 TEST(Config, PartialFileStartsFromItsPreset) {
-  const Config c = config_from_json(nlohmann::json::parse(
-      R"({"preset": "authors", "expert": {"max_iterations": 3}})"));
+  const Config c = config_from_json(
+      nlohmann::json::parse(R"({"preset": "authors", "expert": {"max_iterations": 3}})"));
   EXPECT_EQ(c.expert.max_iterations, 3);
   EXPECT_EQ(c.expert.lane_rule, LaneRule::Footprint);  // from the authors preset
   EXPECT_DOUBLE_EQ(c.safety.leader.time_headway, 3.0);

@@ -11,12 +11,12 @@ namespace {
 
 TEST(Geometry, TouchingBoxesCollideAndSeparatedBoxesDoNot) {
   const OrientedBox a{0.0, 0.0, 0.0, 4.0, 2.0};
-  EXPECT_TRUE(boxes_collide(a, {4.0, 0.0, 0.0, 4.0, 2.0}));    // bumpers touch
+  EXPECT_TRUE(boxes_collide(a, {4.0, 0.0, 0.0, 4.0, 2.0}));  // bumpers touch
   EXPECT_NEAR(overlap_depth(a, {4.0, 0.0, 0.0, 4.0, 2.0}), 0.0, 1e-12);
   EXPECT_FALSE(boxes_collide(a, {4.001, 0.0, 0.0, 4.0, 2.0}));  // 1 mm apart
   EXPECT_TRUE(boxes_collide(a, {0.0, 2.0, 0.0, 4.0, 2.0}));     // sides touch
   EXPECT_FALSE(boxes_collide(a, {0.0, 2.01, 0.0, 4.0, 2.0}));
-  EXPECT_TRUE(boxes_collide(a, {1.0, 0.5, 0.0, 4.0, 2.0}));     // overlap
+  EXPECT_TRUE(boxes_collide(a, {1.0, 0.5, 0.0, 4.0, 2.0}));  // overlap
 }
 
 TEST(Geometry, RotatedBoxReachesFurtherAcross) {

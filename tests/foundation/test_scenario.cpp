@@ -39,7 +39,8 @@ TEST(Scenario, OptionalFieldsOverrideDefaults) {
   j["horizon"] = 6.0;
   j["steps"] = 60;
   j["vehicle"] = {{"length", 5.0}, {"width", 2.0}};
-  j["safe_distance"] = {{"leader", 10.0}, {"follower", {{"standstill", 7.0}, {"time_headway", 1.0}}}};
+  j["safe_distance"] = {{"leader", 10.0},
+                        {"follower", {{"standstill", 7.0}, {"time_headway", 1.0}}}};
   j["limits"] = {{"v", {0.0, 20.0}}, {"a", {-3.0, 2.0}}, {"omega", {-0.2, 0.2}}};
   j["idm"] = {{"min_gap", 3.0}};
   const Scenario s = scenario_from_json(j, Config{});

@@ -50,7 +50,8 @@ TEST(Idm, ClosedLoopHoldsTheEquilibriumGapBehindTheEgo) {
 TEST(Idm, EquilibriumWithFiniteDesiredSpeed) {
   const IdmParameters p;
   const double v = 6.0;
-  const double gap = (p.min_gap + v * p.time_headway) / std::sqrt(1.0 - std::pow(v / p.desired_speed, p.exponent));
+  const double gap =
+      (p.min_gap + v * p.time_headway) / std::sqrt(1.0 - std::pow(v / p.desired_speed, p.exponent));
   EXPECT_NEAR(idm_acceleration(p, v, gap, v), 0.0, 1e-12);
 }
 
@@ -58,7 +59,8 @@ TEST(Idm, PlatoonAtEquilibriumStaysThere) {
   Scenario s = two_lane_scene(Behavior::Idm);
   const double v = 7.0;
   const IdmParameters& p = s.idm;
-  const double gap = (p.min_gap + v * p.time_headway) / std::sqrt(1.0 - std::pow(v / p.desired_speed, p.exponent));
+  const double gap =
+      (p.min_gap + v * p.time_headway) / std::sqrt(1.0 - std::pow(v / p.desired_speed, p.exponent));
   s.target.v = s.follower.v = v;
   s.target.x = s.follower.x + s.vehicle.length + gap;
   // The target has a free road, so it accelerates towards v0; predict only the

@@ -22,8 +22,8 @@ inline constexpr double kInfinity = std::numeric_limits<double>::infinity();
 enum class VariableKind { Continuous, Binary };
 
 struct MiqpProblem {
-  Eigen::SparseMatrix<double> hessian;      ///< n x n, full symmetric (both triangles stored)
-  Eigen::VectorXd gradient;                 ///< n
+  Eigen::SparseMatrix<double> hessian;  ///< n x n, full symmetric (both triangles stored)
+  Eigen::VectorXd gradient;             ///< n
   double constant = 0.0;
   Eigen::SparseMatrix<double> constraints;  ///< m x n
   Eigen::VectorXd row_lower;                ///< m
@@ -59,16 +59,16 @@ struct MiqpSettings {
   long node_limit = 10'000'000;
   double absolute_gap = 1e-9;
   double relative_gap = 1e-9;
-  double integer_tolerance = 1e-7;
+  double integer_tolerance = 1e-6;
   double feasibility_tolerance = 1e-8;  ///< of the continuous relaxations
   bool verbose = false;
 };
 
 struct MiqpResult {
   MiqpStatus status = MiqpStatus::NumericalError;
-  Eigen::VectorXd x;                ///< best point found (empty when none)
-  double objective = kInfinity;     ///< objective at x
-  double best_bound = -kInfinity;   ///< proven lower bound
+  Eigen::VectorXd x;               ///< best point found (empty when none)
+  double objective = kInfinity;    ///< objective at x
+  double best_bound = -kInfinity;  ///< proven lower bound
   long nodes = 0;
   double solve_ms = 0.0;
   std::string message;

@@ -1,0 +1,39 @@
+#pragma once
+// The check of our fast solver against the reference: the same linearized
+// MIQP (the first round's, at the warm start) solved by both.
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "lanechange/config.hpp"
+#include "lanechange/expert/lane_change_solver.hpp"
+#include "lanechange/scenario.hpp"
+
+namespace lanechange::expert {
+
+struct CrossCheckCase {
+  std::uint64_t index = 0;
+  std::string behavior;
+  MiqpStatus fast_status = MiqpStatus::NumericalError;
+  MiqpStatus reference_status = MiqpStatus::NumericalError;
+  double fast_objective = kInfinity;
+  double reference_objective = kInfinity;
+  double relative_difference = 0.0;  ///< |fast - reference| / max(1, |reference|)
+  double fast_ms = 0.0;
+  double reference_ms = 0.0;
+  long fast_nodes = 0;
+  long reference_nodes = 0;
+  bool agree = false;  ///< same verdict and, if solved, objectives within the tolerance
+};
+
+/// The first round's MIQP of a scenario (warm start, prediction along it).
+[[nodiscard]] LaneChangeQp first_round_problem(const Scenario& scenario, const Config& config);
+
+/// Compares the two solvers on one problem. `tolerance` bounds the relative
+/// objective difference.
+[[nodiscard]] CrossCheckCase cross_check(const LaneChangeQp& qp, const LaneChangeSolver& fast,
+                                         const LaneChangeSolver& reference,
+                                         const MiqpSettings& settings, double tolerance);
+
+}  // namespace lanechange::expert

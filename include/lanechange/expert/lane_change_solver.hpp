@@ -1,0 +1,81 @@
+#pragma once
+// A back-end that solves one round's lane-change MIQP (formulation.hpp).
+// Implementations are const and hold no per-solve state, so one instance can
+// serve many threads (the Bonmin one serialises itself: see bonmin_solver.hpp).
+#include <memory>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "lanechange/expert/formulation.hpp"
+#include "lanechange/expert/miqp.hpp"
+
+namespace lanechange::expert {
+
+struct LaneChangeSolution {
+  MiqpStatus status = MiqpStatus::NumericalError;
+  Iterate path;            ///< empty unless a point was found
+  std::vector<int> modes;  ///< the lane mode chosen at each node (-1 where none applies)
+  double objective = kInfinity;
+  long nodes = 0;
+  double solve_ms = 0.0;
+  std::string message;
+  [[nodiscard]] bool has_solution() const { return !path.states.empty(); }
+};
+
+/// Memory a back-end may keep between solves (rounds of one plan, or plans of
+/// one thread). A workspace must not be shared by two solves at once.
+class LaneChangeWorkspace {
+ public:
+  virtual ~LaneChangeWorkspace() = default;
+};
+
+/// What a caller may pass to speed a solve up without changing its answer.
+struct SolveHints {
+  LaneChangeWorkspace* workspace = nullptr;
+  const std::vector<int>* modes = nullptr;  ///< a lane mode per node, likely near the optimum
+  const std::vector<Control>* controls = nullptr;  ///< a starting guess for the controls
+};
+
+class LaneChangeSolver {
+ public:
+  virtual ~LaneChangeSolver() = default;
+  [[nodiscard]] virtual std::string_view name() const = 0;
+  /// A workspace for this back-end (nullptr if it keeps none).
+  [[nodiscard]] virtual std::unique_ptr<LaneChangeWorkspace> make_workspace() const {
+    return nullptr;
+  }
+  [[nodiscard]] virtual LaneChangeSolution solve(const LaneChangeQp& qp,
+                                                 const MiqpSettings& settings,
+                                                 const SolveHints& hints = {}) const = 0;
+};
+
+/// The reference: the MIQP form (to_miqp) solved by Bonmin's B-BB to proven
+/// optimality. Slow; the ground truth for the others.
+class ReferenceLaneChangeSolver final : public LaneChangeSolver {
+ public:
+  explicit ReferenceLaneChangeSolver(double big_m = 1000.0) : big_m_(big_m) {}
+  [[nodiscard]] std::string_view name() const override { return "reference"; }
+  [[nodiscard]] LaneChangeSolution solve(const LaneChangeQp& qp, const MiqpSettings& settings,
+                                         const SolveHints& hints = {}) const override;
+
+ private:
+  double big_m_;
+};
+
+/// Our own exact solver (fast_solver.cpp): branch and bound over the lane
+/// mode of each node, each node a structured QP solved by a Riccati-based
+/// interior-point method.
+class FastLaneChangeSolver final : public LaneChangeSolver {
+ public:
+  [[nodiscard]] std::string_view name() const override { return "fast"; }
+  [[nodiscard]] std::unique_ptr<LaneChangeWorkspace> make_workspace() const override;
+  [[nodiscard]] LaneChangeSolution solve(const LaneChangeQp& qp, const MiqpSettings& settings,
+                                         const SolveHints& hints = {}) const override;
+};
+
+/// The solver named `name`: "fast" or "reference".
+[[nodiscard]] std::shared_ptr<const LaneChangeSolver> make_lane_change_solver(std::string_view name,
+                                                                              double big_m);
+
+}  // namespace lanechange::expert

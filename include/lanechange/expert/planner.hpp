@@ -1,0 +1,77 @@
+#pragma once
+// The expert: successive linearization of the lane-change MIQP (paper Sec. II).
+// Round r linearizes the dynamics about round r-1's solution (the warm start
+// first), re-predicts the cars (IDM reacts to that path), and solves the MIQP.
+// It stops when the largest change of x and y between two rounds' solutions is
+// within the tolerance, or at the round limit.
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "lanechange/config.hpp"
+#include "lanechange/expert/formulation.hpp"
+#include "lanechange/expert/lane_change_solver.hpp"
+#include "lanechange/scenario.hpp"
+#include "lanechange/trajectory.hpp"
+
+namespace lanechange::expert {
+
+enum class PlanStatus {
+  Converged,       ///< the rounds' solutions stopped changing
+  IterationLimit,  ///< the round limit came first (a failure, as in the authors' code)
+  Infeasible,      ///< a round's MIQP has no solution: no safe lane change exists
+  TimeLimit,       ///< the time limit came first
+  SolverError,     ///< the back-end failed
+};
+[[nodiscard]] std::string_view to_string(PlanStatus status);
+
+struct RoundReport {
+  MiqpStatus status = MiqpStatus::NumericalError;
+  double objective = kInfinity;
+  double max_change = kInfinity;  ///< of x and y against the previous round (m)
+  long nodes = 0;
+  double solve_ms = 0.0;
+};
+
+struct ExpertResult {
+  PlanStatus status = PlanStatus::SolverError;
+  std::string reason;            ///< in words, for anything but Converged
+  Iterate path;                  ///< the last round's solution (empty if none)
+  std::vector<int> modes;        ///< lane mode per node of the last solution
+  TrafficPrediction prediction;  ///< the cars as the last round saw them
+  double objective = kInfinity;  ///< of the last round's MIQP
+  std::vector<RoundReport> rounds;
+  double total_ms = 0.0;
+  [[nodiscard]] int iterations() const { return static_cast<int>(rounds.size()); }
+};
+
+struct PlanLimits {
+  double time_limit_s = 60.0;  ///< whole plan
+};
+
+/// The initial guess (config.expert.warm_start) for a scenario.
+[[nodiscard]] Iterate warm_start(const Scenario& scenario, const Config& config,
+                                 const TrafficPrediction& prediction);
+
+class ExpertPlanner {
+ public:
+  /// `config` is the base; each scenario's own fields override it.
+  ExpertPlanner(Config config, std::shared_ptr<const LaneChangeSolver> solver);
+
+  [[nodiscard]] ExpertResult plan(const Scenario& scenario, const PlanLimits& limits = {}) const;
+
+  /// The plan as a trajectory: the controls re-simulated through the
+  /// (nonlinear) discrete model, the prediction, the label and the collision
+  /// check. A plan that is not Converged is labelled failure.
+  [[nodiscard]] Trajectory to_trajectory(const ExpertResult& result,
+                                         const Scenario& scenario) const;
+
+  [[nodiscard]] const Config& config() const { return config_; }
+  [[nodiscard]] const LaneChangeSolver& solver() const { return *solver_; }
+
+ private:
+  Config config_;
+  std::shared_ptr<const LaneChangeSolver> solver_;
+};
+
+}  // namespace lanechange::expert

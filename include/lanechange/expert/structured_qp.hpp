@@ -1,0 +1,113 @@
+#pragma once
+// A convex QP with the structure of an optimal-control problem, solved by a
+// primal-dual interior-point method whose Newton steps are Riccati
+// recursions (the approach of HPIPM). Stage k = 0..N has the augmented state
+// s_k in R^5 ([x, y, v, theta, a_{k-1}], so that the jerk is a stage cost) and
+// the control u_k in R^2 (none at stage N):
+//
+//   minimize   sum_k 0.5 [s;u]' H_k [s;u] + h_k' [s;u]
+//   subject to s_0 fixed,  s_{k+1} = A_k s_k + B_k u_k + c_k,
+//              rows g' [s_k; u_k] <= d at each stage, each hard or soft.
+//
+// A soft row may be violated by sigma >= 0 at the price softness_weight *
+// sigma (an exact L1 penalty): when the rows can all hold, the solution has
+// sigma = 0 and is the solution of the hard problem; a solution that needs
+// sigma > 0 shows that the hard problem is infeasible. Making every row but
+// the control bounds soft gives every QP an interior, so the method needs no
+// phase one and infeasibility shows up as a number rather than a failure.
+//
+// The workspace is sized by setup() and reused: solve() allocates nothing.
+#include <Eigen/Core>
+#include <vector>
+
+namespace lanechange::expert {
+
+inline constexpr int kQpStates = 5;
+inline constexpr int kQpControls = 2;
+inline constexpr int kQpStage = kQpStates + kQpControls;
+
+using QpStateVector = Eigen::Matrix<double, kQpStates, 1>;
+using QpStageVector = Eigen::Matrix<double, kQpStage, 1>;
+using QpStageMatrix = Eigen::Matrix<double, kQpStage, kQpStage>;
+
+struct QpRow {
+  QpStageVector g = QpStageVector::Zero();
+  double d = 0.0;
+  bool soft = false;
+};
+
+struct QpStage {
+  Eigen::Matrix<double, kQpStates, kQpStates> A = Eigen::Matrix<double, 5, 5>::Identity();
+  Eigen::Matrix<double, kQpStates, kQpControls> B = Eigen::Matrix<double, 5, 2>::Zero();
+  QpStateVector c = QpStateVector::Zero();
+  QpStageMatrix H = QpStageMatrix::Zero();
+  QpStageVector h = QpStageVector::Zero();
+  std::vector<QpRow> rows;
+};
+
+struct StructuredQp {
+  std::vector<QpStage> stages;  ///< N + 1; the dynamics of the last are unused
+  QpStateVector initial_state = QpStateVector::Zero();
+  /// An optional equality g' [s_N; u_N] = d on the last stage (the terminal
+  /// lateral position). Written as two opposed inequalities it would leave
+  /// the method no interior; as an equality it costs one extra back-substitution.
+  bool has_terminal_equality = false;
+  QpStageVector terminal_g = QpStageVector::Zero();
+  double terminal_d = 0.0;
+  double softness_weight = 1e6;
+  [[nodiscard]] int steps() const { return static_cast<int>(stages.size()) - 1; }
+};
+
+struct QpSettings {
+  int max_iterations = 60;
+  double tolerance = 1e-10;        ///< on the mean complementarity product
+  double primal_tolerance = 1e-8;  ///< on the rows and the terminal equality (m)
+  /// On the stationarity of the controls. Looser than the rest: with barrier
+  /// weights of 1e12 and more near the end, the Newton solves carry errors of
+  /// about 1e-5 there, while mu and the rows are already exact.
+  double dual_tolerance = 1e-3;
+  double softness_tolerance = 1e-6;  ///< a larger sigma means the hard problem is infeasible
+  double stalled_softness = 1e-2;    ///< the same, for a solve stopped by the iteration limit
+};
+
+enum class QpStatus { Optimal, Infeasible, IterationLimit, NumericalError };
+
+struct QpResult {
+  QpStatus status = QpStatus::NumericalError;
+  int iterations = 0;
+  double max_softness = 0.0;  ///< largest sigma at the solution
+  double objective = 0.0;     ///< of the stage costs, without the softness price
+};
+
+/// Per-stage vectors of the interior-point method; sized once for a problem shape.
+class QpWorkspace {
+ public:
+  void setup(const StructuredQp& qp);
+  /// The solution: states s_0..s_N and controls u_0..u_{N-1} in one vector per stage.
+  [[nodiscard]] const std::vector<QpStageVector>& solution() const { return w_; }
+  /// A starting guess for the controls (rolled out through the dynamics).
+  void set_initial_controls(const std::vector<Eigen::Vector2d>& controls);
+
+ private:
+  friend struct InteriorPointMethod;
+  std::vector<int> row_offset_;
+  std::vector<int> single_index_;  ///< per row: its only nonzero, or -1
+  std::vector<QpStageVector> w_, dw_, grad_, grad_base_, dw_unit_;
+  double terminal_multiplier_ = 0.0;
+  double terminal_step_ = 0.0;
+  std::vector<QpStageMatrix> hess_;
+  std::vector<Eigen::Matrix<double, kQpControls, kQpStates>> gain_;
+  std::vector<Eigen::Vector2d> feedforward_, initial_controls_;
+  std::vector<Eigen::Matrix2d> rbar_inverse_;
+  std::vector<Eigen::Matrix<double, kQpControls, kQpStates>> sbar_;
+  std::vector<Eigen::Matrix<double, kQpStates, 1>> costate_;
+  std::vector<double> t_, lambda_, sigma_, lambda_soft_;
+  std::vector<double> dt_, dlambda_, dsigma_, dlambda_soft_;
+  std::vector<double> weight_, offset_, soft_q_;
+  std::vector<double> dt_aff_, dlambda_aff_, dsigma_aff_, dlambda_soft_aff_;
+};
+
+/// Solves from the workspace's initial controls (zero unless set).
+QpResult solve_structured_qp(const StructuredQp& qp, QpWorkspace& ws, const QpSettings& settings);
+
+}  // namespace lanechange::expert

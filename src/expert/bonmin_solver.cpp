@@ -1,0 +1,441 @@
+#include "lanechange/expert/bonmin_solver.hpp"
+
+#include <signal.h>
+
+#include <algorithm>
+#include <chrono>
+#include <climits>
+#include <cmath>
+#include <coin/BonBonminSetup.hpp>
+#include <coin/BonCbc.hpp>
+#include <coin/BonTMINLP.hpp>
+#include <coin/BonTNLPSolver.hpp>
+#include <coin/CoinError.hpp>
+#include <coin/IpException.hpp>
+#include <csignal>
+#include <exception>
+#include <memory>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <utility>
+#include <vector>
+
+// Defined in libbonmin (BonCbc.cpp). Bonmin's SIGINT handler sets it, and while it is
+// set every later NLP is reported infeasible, so each solve clears it first.
+extern bool BonminAbortAll;  // NOLINT(readability-identifier-naming)
+
+namespace lanechange::expert {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+using Ipopt::Index;
+using Ipopt::Number;
+
+double milliseconds_since(Clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+}
+
+struct SparseTriplets {
+  std::vector<Index> rows;
+  std::vector<Index> cols;
+  std::vector<Number> values;
+
+  [[nodiscard]] Index size() const { return static_cast<Index>(values.size()); }
+};
+
+SparseTriplets triplets_of(const Eigen::SparseMatrix<double>& matrix, bool lower_triangle_only) {
+  SparseTriplets triplets;
+  for (int outer = 0; outer < matrix.outerSize(); ++outer) {
+    for (Eigen::SparseMatrix<double>::InnerIterator it(matrix, outer); it; ++it) {
+      if (lower_triangle_only && it.row() < it.col()) continue;
+      triplets.rows.push_back(static_cast<Index>(it.row()));
+      triplets.cols.push_back(static_cast<Index>(it.col()));
+      triplets.values.push_back(it.value());
+    }
+  }
+  return triplets;
+}
+
+// Ipopt asks once for the structure (values == nullptr), then only for values.
+bool write_triplets(const SparseTriplets& triplets, Number scale, Index* i_row, Index* j_col,
+                    Number* values) {
+  if (values == nullptr) {
+    std::copy(triplets.rows.begin(), triplets.rows.end(), i_row);
+    std::copy(triplets.cols.begin(), triplets.cols.end(), j_col);
+  } else {
+    for (Index e = 0; e < triplets.size(); ++e) values[e] = scale * triplets.values[e];
+  }
+  return true;
+}
+
+struct ColumnBounds {
+  Eigen::VectorXd lower;
+  Eigen::VectorXd upper;
+};
+
+// Bonmin requires binaries' bounds inside [0, 1], and Ipopt rejects crossed bounds as
+// an invalid problem, so bounds are tightened here and crossing means infeasible.
+std::optional<ColumnBounds> effective_column_bounds(const MiqpProblem& problem,
+                                                    double integer_tolerance) {
+  ColumnBounds bounds{problem.col_lower, problem.col_upper};
+  for (Eigen::Index j = 0; j < problem.num_variables(); ++j) {
+    if (problem.kinds[static_cast<std::size_t>(j)] == VariableKind::Binary) {
+      bounds.lower[j] = std::max(0.0, std::ceil(bounds.lower[j] - integer_tolerance));
+      bounds.upper[j] = std::min(1.0, std::floor(bounds.upper[j] + integer_tolerance));
+    }
+    if (bounds.lower[j] > bounds.upper[j]) return std::nullopt;
+  }
+  return bounds;
+}
+
+// Bonmin frees an invalid pointer when it is handed a problem without variables.
+void solve_without_variables(const MiqpProblem& problem, MiqpResult& result) {
+  const bool feasible = (problem.row_lower.array() <= 0.0).all() &&
+                        (problem.row_upper.array() >= 0.0).all();
+  result.status = feasible ? MiqpStatus::Optimal : MiqpStatus::Infeasible;
+  result.objective = feasible ? problem.constant : kInfinity;
+  result.best_bound = result.objective;
+}
+
+bool rows_cross(const MiqpProblem& problem) {
+  return (problem.row_lower.array() > problem.row_upper.array()).any();
+}
+
+class MiqpTminlp final : public Bonmin::TMINLP {
+ public:
+  MiqpTminlp(const MiqpProblem& problem, ColumnBounds bounds)
+      : problem_(problem),
+        bounds_(std::move(bounds)),
+        hessian_lower_(triplets_of(problem.hessian, true)),
+        jacobian_(triplets_of(problem.constraints, false)),
+        rows_(problem.constraints) {}
+
+  [[nodiscard]] SolverReturn final_status() const { return final_status_; }
+
+  bool get_nlp_info(Index& n, Index& m, Index& nnz_jac_g, Index& nnz_h_lag,
+                    Ipopt::TNLP::IndexStyleEnum& index_style) override {
+    n = problem_.num_variables();
+    m = problem_.num_rows();
+    nnz_jac_g = jacobian_.size();
+    nnz_h_lag = hessian_lower_.size();
+    index_style = Ipopt::TNLP::C_STYLE;
+    return true;
+  }
+
+  bool get_variables_types(Index n, VariableType* var_types) override {
+    for (Index j = 0; j < n; ++j) {
+      const bool binary = problem_.kinds[static_cast<std::size_t>(j)] == VariableKind::Binary;
+      var_types[j] = binary ? BINARY : CONTINUOUS;
+    }
+    return true;
+  }
+
+  bool get_variables_linearity(Index n, Ipopt::TNLP::LinearityType* var_types) override {
+    std::fill_n(var_types, n, Ipopt::TNLP::LINEAR);
+    for (Index e = 0; e < hessian_lower_.size(); ++e) {
+      if (hessian_lower_.values[e] == 0.0) continue;
+      var_types[hessian_lower_.rows[e]] = Ipopt::TNLP::NON_LINEAR;
+      var_types[hessian_lower_.cols[e]] = Ipopt::TNLP::NON_LINEAR;
+    }
+    return true;
+  }
+
+  bool get_constraints_linearity(Index m, Ipopt::TNLP::LinearityType* const_types) override {
+    std::fill_n(const_types, m, Ipopt::TNLP::LINEAR);
+    return true;
+  }
+
+  bool get_bounds_info(Index n, Number* x_l, Number* x_u, Index m, Number* g_l,
+                       Number* g_u) override {
+    Eigen::Map<Eigen::VectorXd>(x_l, n) = bounds_.lower;
+    Eigen::Map<Eigen::VectorXd>(x_u, n) = bounds_.upper;
+    Eigen::Map<Eigen::VectorXd>(g_l, m) = problem_.row_lower;
+    Eigen::Map<Eigen::VectorXd>(g_u, m) = problem_.row_upper;
+    return true;
+  }
+
+  bool get_starting_point(Index n, bool init_x, Number* x, bool init_z, Number* z_l, Number* z_u,
+                          Index m, bool init_lambda, Number* lambda) override {
+    if (init_x) {
+      Eigen::Map<Eigen::VectorXd>(x, n) =
+          Eigen::VectorXd::Zero(n).cwiseMax(bounds_.lower).cwiseMin(bounds_.upper);
+    }
+    if (init_z) {
+      std::fill_n(z_l, n, 0.0);
+      std::fill_n(z_u, n, 0.0);
+    }
+    if (init_lambda) std::fill_n(lambda, m, 0.0);
+    return true;
+  }
+
+  bool eval_f(Index n, const Number* x, bool, Number& obj_value) override {
+    obj_value = problem_.objective(Eigen::Map<const Eigen::VectorXd>(x, n));
+    return true;
+  }
+
+  bool eval_grad_f(Index n, const Number* x, bool, Number* grad_f) override {
+    const Eigen::Map<const Eigen::VectorXd> point(x, n);
+    Eigen::Map<Eigen::VectorXd>(grad_f, n) = problem_.hessian * point + problem_.gradient;
+    return true;
+  }
+
+  bool eval_g(Index n, const Number* x, bool, Index m, Number* g) override {
+    Eigen::Map<Eigen::VectorXd>(g, m) =
+        problem_.constraints * Eigen::Map<const Eigen::VectorXd>(x, n);
+    return true;
+  }
+
+  bool eval_jac_g(Index, const Number*, bool, Index, Index, Index* i_row, Index* j_col,
+                  Number* values) override {
+    return write_triplets(jacobian_, 1.0, i_row, j_col, values);
+  }
+
+  // The constraints are linear, so the Lagrangian's Hessian is the objective's.
+  bool eval_h(Index, const Number*, bool, Number obj_factor, Index, const Number*, bool, Index,
+              Index* i_row, Index* j_col, Number* values) override {
+    return write_triplets(hessian_lower_, obj_factor, i_row, j_col, values);
+  }
+
+  // Used by outer approximation to linearise one row at a time.
+  bool eval_gi(Index n, const Number* x, bool, Index i, Number& gi) override {
+    gi = rows_.row(i).dot(Eigen::Map<const Eigen::VectorXd>(x, n));
+    return true;
+  }
+
+  bool eval_grad_gi(Index, const Number*, bool, Index i, Index& nele_grad_gi, Index* j_col,
+                    Number* values) override {
+    nele_grad_gi = 0;
+    for (RowMajorMatrix::InnerIterator it(rows_, i); it; ++it, ++nele_grad_gi) {
+      if (j_col != nullptr) j_col[nele_grad_gi] = static_cast<Index>(it.col());
+      if (values != nullptr) values[nele_grad_gi] = it.value();
+    }
+    return true;
+  }
+
+  void finalize_solution(SolverReturn status, Index, const Number*, Number) override {
+    final_status_ = status;
+  }
+
+  [[nodiscard]] const BranchingInfo* branchingInfo() const override { return nullptr; }
+  [[nodiscard]] const SosInfo* sosConstraints() const override { return nullptr; }
+
+  bool hasLinearObjective() override {
+    return std::all_of(hessian_lower_.values.begin(), hessian_lower_.values.end(),
+                       [](double value) { return value == 0.0; });
+  }
+
+ private:
+  using RowMajorMatrix = Eigen::SparseMatrix<double, Eigen::RowMajor>;
+
+  const MiqpProblem& problem_;
+  ColumnBounds bounds_;
+  SparseTriplets hessian_lower_;
+  SparseTriplets jacobian_;
+  RowMajorMatrix rows_;
+  SolverReturn final_status_ = MINLP_ERROR;
+};
+
+void set_option(Ipopt::OptionsList& options, const std::string& name, const std::string& value) {
+  if (!options.SetStringValue(name, value)) throw std::invalid_argument("Bonmin option " + name);
+}
+void set_option(Ipopt::OptionsList& options, const std::string& name, double value) {
+  if (!options.SetNumericValue(name, value)) throw std::invalid_argument("Bonmin option " + name);
+}
+void set_option(Ipopt::OptionsList& options, const std::string& name, int value) {
+  if (!options.SetIntegerValue(name, value)) throw std::invalid_argument("Bonmin option " + name);
+}
+
+void silence(Ipopt::OptionsList& options) {
+  for (const char* log_level :
+       {"bonmin.bb_log_level", "bonmin.nlp_log_level", "bonmin.nlp_log_at_root",
+        "bonmin.lp_log_level", "bonmin.milp_log_level", "bonmin.oa_log_level",
+        "bonmin.oa_cuts_log_level", "bonmin.fp_log_level", "print_level"}) {
+    set_option(options, log_level, 0);
+  }
+  set_option(options, "sb", "yes");  // Ipopt's banner
+}
+
+void set_limits(Ipopt::OptionsList& options, const MiqpSettings& settings) {
+  set_option(options, "bonmin.time_limit", std::clamp(settings.time_limit_s, 0.0, 1e10));
+  set_option(options, "bonmin.node_limit",
+             static_cast<int>(std::clamp(settings.node_limit, 0L, long{INT_MAX})));
+  set_option(options, "bonmin.allowable_gap", settings.absolute_gap);
+  set_option(options, "bonmin.allowable_fraction_gap", settings.relative_gap);
+  // Cbc prunes nodes that cannot beat the incumbent by cutoff_decr (default 1e-5),
+  // which would let the answer be that far from optimal.
+  set_option(options, "bonmin.cutoff_decr", settings.absolute_gap);
+  set_option(options, "bonmin.integer_tolerance", settings.integer_tolerance);
+}
+
+// Bonmin 1.8 runs an NLP feasibility pump at the root by default. It is only a
+// heuristic, and on an infeasible problem it solves ~200 NLPs before giving up, which
+// tripled the time of our tests without changing any answer.
+void drop_heuristics(Ipopt::OptionsList& options) {
+  set_option(options, "bonmin.heuristic_feasibility_pump", "no");
+}
+
+// Ipopt's defaults stop at a scaled error of 1e-8 and relax every bound by 1e-8
+// relative, which leaves visible violations on big-M rows; the reference needs better.
+void set_nlp_accuracy(Ipopt::OptionsList& options, const MiqpSettings& settings) {
+  set_option(options, "tol", 1e-10);
+  set_option(options, "constr_viol_tol", settings.feasibility_tolerance);
+  set_option(options, "bound_relax_factor", 0.0);
+  set_option(options, "honor_original_bounds", "yes");
+}
+
+void configure(Bonmin::BonminSetup& setup, const MiqpSettings& settings,
+               BonminAlgorithm algorithm) {
+  // Marks the options as read, so that a stray bonmin.opt in the working directory
+  // cannot override ours.
+  setup.readOptionsString("");
+  Ipopt::OptionsList& options = *setup.options();
+  set_option(options, "bonmin.algorithm",
+             algorithm == BonminAlgorithm::BranchAndBound ? "B-BB" : "B-OA");
+  set_limits(options, settings);
+  drop_heuristics(options);
+  set_nlp_accuracy(options, settings);
+  if (!settings.verbose) silence(options);
+}
+
+double finite_or_infinite(double value) {
+  constexpr double kBonminInfinity = 1e100;  // Bonmin reports "no bound" as +-1e200 or DBL_MAX
+  if (value >= kBonminInfinity) return kInfinity;
+  if (value <= -kBonminInfinity) return -kInfinity;
+  return value;
+}
+
+MiqpStatus status_of(Bonmin::TMINLP::SolverReturn status, const Bonmin::Bab& bab) {
+  switch (status) {
+    case Bonmin::TMINLP::SUCCESS:
+      return bab.bestSolution() != nullptr ? MiqpStatus::Optimal : MiqpStatus::NumericalError;
+    case Bonmin::TMINLP::INFEASIBLE: return MiqpStatus::Infeasible;
+    case Bonmin::TMINLP::LIMIT_EXCEEDED:
+      return bab.model().isNodeLimitReached() ? MiqpStatus::NodeLimit : MiqpStatus::TimeLimit;
+    default: return MiqpStatus::NumericalError;
+  }
+}
+
+std::string message_of(Bonmin::TMINLP::SolverReturn status) {
+  switch (status) {
+    case Bonmin::TMINLP::CONTINUOUS_UNBOUNDED: return "the continuous relaxation is unbounded";
+    case Bonmin::TMINLP::USER_INTERRUPT: return "Bonmin was interrupted";
+    case Bonmin::TMINLP::MINLP_ERROR: return "Bonmin reported an error";
+    default: return {};
+  }
+}
+
+void fill_result(const MiqpProblem& problem, const MiqpTminlp& tminlp, Bonmin::Bab& bab,
+                 MiqpResult& result) {
+  result.status = status_of(tminlp.final_status(), bab);
+  result.message = message_of(tminlp.final_status());
+  result.nodes = bab.numNodes();
+  if (bab.bestSolution() != nullptr) {
+    result.x = Eigen::Map<const Eigen::VectorXd>(bab.bestSolution(), problem.num_variables());
+    result.objective = problem.objective(result.x);
+  }
+  result.best_bound =
+      result.status == MiqpStatus::Infeasible ? kInfinity : finite_or_infinite(bab.bestBound());
+}
+
+// Bonmin's Bab installs its own SIGINT handler (a second Ctrl-C calls exit(0)) and never
+// restores the caller's. This puts the caller's handler back and passes on an interrupt
+// that Bonmin swallowed.
+class SigintGuard {
+ public:
+  SigintGuard() {
+    sigaction(SIGINT, nullptr, &callers_action_);
+    BonminAbortAll = false;
+  }
+  ~SigintGuard() {
+    sigaction(SIGINT, &callers_action_, nullptr);
+    if (BonminAbortAll) {
+      BonminAbortAll = false;
+      std::raise(SIGINT);
+    }
+  }
+  SigintGuard(const SigintGuard&) = delete;
+  SigintGuard& operator=(const SigintGuard&) = delete;
+
+ private:
+  struct sigaction callers_action_ {};
+};
+
+// The caller holds lock_coin_or_libraries().
+void run_bonmin(const MiqpProblem& problem, ColumnBounds bounds, const MiqpSettings& settings,
+                BonminAlgorithm algorithm, MiqpResult& result) {
+  const SigintGuard sigint_guard;
+  Ipopt::SmartPtr<MiqpTminlp> tminlp = new MiqpTminlp(problem, std::move(bounds));
+  Bonmin::BonminSetup setup;
+  configure(setup, settings, algorithm);
+  setup.initialize(GetRawPtr(tminlp));
+  Bonmin::Bab bab;
+  // Cbc would otherwise measure the time limit in process CPU seconds.
+  bab.model().setUseElapsedTime(true);
+  bab(setup);
+  fill_result(problem, *tminlp, bab, result);
+}
+
+std::string describe_current_exception() {
+  try {
+    throw;
+  } catch (Bonmin::TNLPSolver::UnsolvedError* error) {  // Bonmin throws these by pointer
+    const std::unique_ptr<Bonmin::TNLPSolver::UnsolvedError> owned(error);
+    return "Ipopt failed on a node relaxation with status " + std::to_string(error->errorNum());
+  } catch (const CoinError& error) {
+    return "COIN-OR error in " + error.className() + "::" + error.methodName() + ": " +
+           error.message();
+  } catch (const Ipopt::IpoptException& error) {
+    return "Ipopt exception: " + error.Message();
+  } catch (const std::exception& error) {
+    return error.what();
+  } catch (int code) {
+    return "Bonmin threw error code " + std::to_string(code);
+  } catch (...) {
+    return "unknown exception from Bonmin";
+  }
+}
+
+}  // namespace
+
+std::unique_lock<std::mutex> lock_coin_or_libraries() {
+  static std::mutex coin_or_mutex;
+  return std::unique_lock(coin_or_mutex);
+}
+
+BonminSolver::BonminSolver(BonminAlgorithm algorithm) : algorithm_(algorithm) {}
+
+std::string_view BonminSolver::name() const {
+  return algorithm_ == BonminAlgorithm::BranchAndBound ? "bonmin-B-BB" : "bonmin-B-OA";
+}
+
+MiqpResult BonminSolver::solve(const MiqpProblem& problem, const MiqpSettings& settings) const {
+  const Clock::time_point start = Clock::now();
+  MiqpResult result;
+  if (std::string problem_error = problem.check(); !problem_error.empty()) {
+    result.status = MiqpStatus::InvalidProblem;
+    result.message = std::move(problem_error);
+    return result;
+  }
+  std::optional<ColumnBounds> bounds = effective_column_bounds(problem, settings.integer_tolerance);
+  if (!bounds || rows_cross(problem)) {
+    result.status = MiqpStatus::Infeasible;
+    result.best_bound = kInfinity;
+    result.message = "a lower bound exceeds its upper bound";
+  } else if (problem.num_variables() == 0) {
+    solve_without_variables(problem, result);
+  } else {
+    // Also held while exceptions are handled: they own pieces of Bonmin's state.
+    const auto lock = lock_coin_or_libraries();
+    try {
+      run_bonmin(problem, std::move(*bounds), settings, algorithm_, result);
+    } catch (...) {
+      result.status = MiqpStatus::NumericalError;
+      result.message = describe_current_exception();
+    }
+  }
+  result.solve_ms = milliseconds_since(start);
+  return result;
+}
+
+}  // namespace lanechange::expert

@@ -1,0 +1,49 @@
+#include "lanechange/expert/crosscheck.hpp"
+
+#include <cmath>
+
+#include "lanechange/expert/planner.hpp"
+
+namespace lanechange::expert {
+
+LaneChangeQp first_round_problem(const Scenario& scenario, const Config& base) {
+  const Config config = effective_config(base, scenario);
+  const int steps = scenario.steps;
+  const double dt = scenario.horizon / steps;
+  const int predicted = steps + config.expert.prediction_lead_steps;
+  TrafficPrediction prediction = predict_traffic(scenario, config, predicted, dt);
+  const Iterate point = warm_start(scenario, config, prediction);
+  if (scenario.behavior == Behavior::Idm) {
+    std::vector<EgoFootprint> path;
+    for (const State& z : point.states) path.push_back({z[kX], z[kY], z[kV]});
+    prediction = predict_traffic(scenario, config, predicted, dt, &path);
+  }
+  return build_lane_change_qp(scenario, config, point, prediction);
+}
+
+CrossCheckCase cross_check(const LaneChangeQp& qp, const LaneChangeSolver& fast,
+                           const LaneChangeSolver& reference, const MiqpSettings& settings,
+                           double tolerance) {
+  CrossCheckCase c;
+  const LaneChangeSolution f = fast.solve(qp, settings);
+  const LaneChangeSolution r = reference.solve(qp, settings);
+  c.fast_status = f.status;
+  c.reference_status = r.status;
+  c.fast_objective = f.objective;
+  c.reference_objective = r.objective;
+  c.fast_ms = f.solve_ms;
+  c.reference_ms = r.solve_ms;
+  c.fast_nodes = f.nodes;
+  c.reference_nodes = r.nodes;
+  const bool both_solved = f.status == MiqpStatus::Optimal && r.status == MiqpStatus::Optimal;
+  const bool both_infeasible =
+      f.status == MiqpStatus::Infeasible && r.status == MiqpStatus::Infeasible;
+  if (both_solved) {
+    c.relative_difference =
+        std::abs(f.objective - r.objective) / std::max(1.0, std::abs(r.objective));
+  }
+  c.agree = both_infeasible || (both_solved && c.relative_difference <= tolerance);
+  return c;
+}
+
+}  // namespace lanechange::expert

@@ -1,0 +1,449 @@
+// Our exact solver for the lane-change MIQP. A node of the search fixes the
+// lane mode of some nodes of the horizon and leaves the rest free (no lane
+// rows there): its QP is a relaxation of every completion, so its optimum is
+// a lower bound for them. Branching picks the free node whose relaxed state
+// violates all its modes the most, and makes one child per mode. The search
+// is depth first, best child first, and starts from the hinted modes (the
+// previous round's) as an incumbent, so most of the tree is pruned at once.
+// Nothing here assumes a monotone lane sequence: the search is exact for any.
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+
+#include "lanechange/expert/lane_change_solver.hpp"
+#include "lanechange/expert/structured_qp.hpp"
+
+namespace lanechange::expert {
+
+namespace {
+
+constexpr int kFree = -1;
+constexpr double kModeTolerance = 1e-6;  // m: a lane row may be this far off and still hold
+
+struct FastWorkspace final : LaneChangeWorkspace {
+  StructuredQp base;  // dynamics, costs and bounds of the round
+  StructuredQp node;  // the base plus the lane rows of one search node
+  QpWorkspace qp_workspace;
+  std::vector<std::vector<int>> stack;  // mode assignments waiting to be solved
+  std::vector<Control> start_controls;
+};
+
+void add_row(QpStage& stage, const Eigen::Vector4d& g_state, double d, bool soft) {
+  QpRow row;
+  row.g.head<4>() = g_state;
+  row.d = d;
+  row.soft = soft;
+  stage.rows.push_back(row);
+}
+
+void add_control_bound(QpStage& stage, int component, double lo, double hi) {
+  QpRow upper;
+  upper.g[kQpStates + component] = 1.0;
+  upper.d = hi;
+  QpRow lower;
+  lower.g[kQpStates + component] = -1.0;
+  lower.d = -lo;
+  stage.rows.push_back(upper);
+  stage.rows.push_back(lower);
+}
+
+// The round's QP without lane rows, in the solver's stage form.
+void build_base(const LaneChangeQp& qp, StructuredQp& out) {
+  const int n = qp.steps;
+  out.stages.resize(n + 1);
+  out.initial_state.head<4>() = qp.initial_state;
+  out.initial_state[4] = 0.0;
+  out.has_terminal_equality = qp.terminal_lateral_fixed;
+  out.terminal_g.setZero();
+  out.terminal_g[kY] = 1.0;
+  out.terminal_d = qp.lateral_reference;
+  for (int k = 0; k <= n; ++k) {
+    QpStage& st = out.stages[k];
+    st.rows.clear();
+    st.A.setZero();
+    st.B.setZero();
+    st.c.setZero();
+    st.H.setZero();
+    st.h.setZero();
+    if (k < n) {
+      st.A.topLeftCorner<4, 4>() = qp.dynamics[k].A;
+      st.B.topRows<4>() = qp.dynamics[k].B;
+      st.B(4, kA) = 1.0;  // the next stage remembers this acceleration for the jerk
+      st.c.head<4>() = qp.dynamics[k].c;
+      st.H(5, 5) += 2.0 * qp.accel_weight;
+      if (k >= 1) {
+        const double w = 2.0 * qp.jerk_weight;
+        st.H(5, 5) += w;
+        st.H(4, 4) += w;
+        st.H(4, 5) -= w;
+        st.H(5, 4) -= w;
+      }
+      add_control_bound(st, kA, qp.control_lower[kA], qp.control_upper[kA]);
+      add_control_bound(st, kOmega, qp.control_lower[kOmega], qp.control_upper[kOmega]);
+    }
+    const double wy = qp.lateral_weight[k];
+    st.H(kY, kY) += 2.0 * wy;
+    st.h[kY] -= 2.0 * wy * qp.lateral_reference;
+    if (k == n && qp.terminal_x_weight > 0.0) {
+      st.H(kX, kX) += 2.0 * qp.terminal_x_weight;
+      st.h[kX] -= 2.0 * qp.terminal_x_weight * qp.terminal_x_reference;
+    }
+    // The bounds on x and theta never bind in practice (they are far from
+    // anything the controls can reach), so the search leaves them out: a
+    // relaxation, still a valid bound. A solution that breaks one is solved
+    // again with them (see solve_node).
+    if (k >= 1) {
+      for (int i : {kY, kV}) {
+        Eigen::Vector4d e = Eigen::Vector4d::Unit(i);
+        add_row(st, e, qp.state_upper[k][i], true);
+        add_row(st, -e, -qp.state_lower[k][i], true);
+      }
+    }
+  }
+}
+
+double mode_violation(const LaneMode& mode, const State& z) {
+  double worst = 0.0;
+  for (const HalfSpace& h : mode.rows) worst = std::max(worst, h.g.dot(z) - h.upper);
+  return worst;
+}
+
+// The y-interval of a mode, from its rows on y alone.
+std::pair<double, double> lateral_range(const LaneMode& mode, double lo, double hi) {
+  for (const HalfSpace& h : mode.rows) {
+    if (h.g[kX] != 0.0 || h.g[kV] != 0.0) continue;
+    if (h.g[kY] > 0.0) hi = std::min(hi, h.upper / h.g[kY]);
+    if (h.g[kY] < 0.0) lo = std::max(lo, h.upper / h.g[kY]);
+  }
+  return {lo, hi};
+}
+
+// The tightest limit a mode puts on g'z for the row direction g, or +inf.
+double limit_along(const LaneMode& mode, const Eigen::Vector4d& g) {
+  double limit = kInfinity;
+  for (const HalfSpace& h : mode.rows) {
+    if ((h.g - g).cwiseAbs().maxCoeff() == 0.0) limit = std::min(limit, h.upper);
+  }
+  return limit;
+}
+
+// A free node still lies in the union of its modes. Where the lowest and the
+// highest mode (in y) both bound x + h v from above, with the same h, the
+// union lies below the line through their corners, a ramp in y: an
+// inequality that every mode implies, which tightens the relaxation a lot
+// (the ego cannot be far ahead of its leader while still low in its lane).
+bool ramp_row(const LaneChangeQp& qp, int k, HalfSpace& out) {
+  const auto& modes = qp.node_modes[k];
+  const double ylo = qp.state_lower[k][kY];
+  const double yhi = qp.state_upper[k][kY];
+  const LaneMode& low = modes.front();
+  const LaneMode& high = modes.back();
+  const auto [low_lo, low_hi] = lateral_range(low, ylo, yhi);
+  const auto [high_lo, high_hi] = lateral_range(high, ylo, yhi);
+  for (const HalfSpace& h : low.rows) {
+    if (h.g[kX] != 1.0 || h.g[kY] != 0.0) continue;
+    const double u_low = limit_along(low, h.g);
+    const double u_high = limit_along(high, h.g);
+    if (!std::isfinite(u_low) || !std::isfinite(u_high)) continue;
+    // Every middle mode must allow no more than the larger of the two.
+    const double u_max = std::max(u_low, u_high);
+    bool middle_ok = true;
+    for (std::size_t m = 1; m + 1 < modes.size(); ++m) {
+      middle_ok = middle_ok && limit_along(modes[m], h.g) <= u_max;
+    }
+    if (!middle_ok) continue;
+    double slope = 0.0;  // of the limit in y
+    if (u_high >= u_low && high_lo > ylo) slope = (u_high - u_low) / (high_lo - ylo);
+    if (u_high < u_low && yhi > low_hi) slope = (u_high - u_low) / (yhi - low_hi);
+    const double anchor_y = u_high >= u_low ? ylo : yhi;
+    const double anchor_u = u_high >= u_low ? u_low : u_high;
+    // g'z <= anchor_u + slope (y - anchor_y)  <=>  g'z - slope y <= anchor_u - slope anchor_y
+    out.g = h.g;
+    out.g[kY] -= slope;
+    out.upper = anchor_u - slope * anchor_y;
+    (void)low_lo;
+    (void)high_hi;
+    return true;
+  }
+  return false;
+}
+
+// The base with the lane rows of `modes` added; free nodes get their ramp.
+void build_node(const LaneChangeQp& qp, const std::vector<int>& modes, bool all_bounds,
+                FastWorkspace& ws) {
+  for (int k = 0; k <= qp.steps; ++k) {
+    QpStage& st = ws.node.stages[k];
+    st.rows.assign(ws.base.stages[k].rows.begin(), ws.base.stages[k].rows.end());
+    if (all_bounds && k >= 1) {
+      for (int i : {kX, kTheta}) {
+        Eigen::Vector4d e = Eigen::Vector4d::Unit(i);
+        add_row(st, e, qp.state_upper[k][i], true);
+        add_row(st, -e, -qp.state_lower[k][i], true);
+      }
+    }
+    if (k == 0 || qp.node_modes[k].empty()) continue;  // the initial state is fixed: checked apart
+    if (modes[k] == kFree) {
+      HalfSpace ramp;
+      if (ramp_row(qp, k, ramp)) add_row(st, ramp.g, ramp.upper, true);
+      continue;
+    }
+    for (const HalfSpace& h : qp.node_modes[k][modes[k]].rows) add_row(st, h.g, h.upper, true);
+  }
+}
+
+Iterate path_of(const QpWorkspace& qp_ws, int steps) {
+  Iterate path;
+  path.states.reserve(steps + 1);
+  path.controls.reserve(steps);
+  const auto& w = qp_ws.solution();
+  for (int k = 0; k <= steps; ++k) {
+    path.states.emplace_back(w[k].head<4>());
+    if (k < steps) path.controls.emplace_back(w[k].tail<2>());
+  }
+  return path;
+}
+
+struct NodeOutcome {
+  bool feasible = false;
+  bool numerical_failure = false;
+  double objective = kInfinity;
+  Iterate path;
+};
+
+bool within_x_theta_bounds(const LaneChangeQp& qp, const Iterate& path) {
+  for (int k = 1; k <= qp.steps; ++k) {
+    for (int i : {kX, kTheta}) {
+      const double z = path.states[k][i];
+      if (z > qp.state_upper[k][i] + kModeTolerance || z < qp.state_lower[k][i] - kModeTolerance) {
+        return false;
+      }
+    }
+  }
+  return true;
+}
+
+NodeOutcome solve_node_with(const LaneChangeQp& qp, const std::vector<int>& modes, bool all_bounds,
+                            FastWorkspace& ws) {
+  build_node(qp, modes, all_bounds, ws);
+  ws.qp_workspace.setup(ws.node);
+  ws.qp_workspace.set_initial_controls(ws.start_controls);
+  const QpResult r = solve_structured_qp(ws.node, ws.qp_workspace, QpSettings{});
+  NodeOutcome out;
+  if (r.status == QpStatus::NumericalError || r.status == QpStatus::IterationLimit) {
+    out.numerical_failure = true;
+    return out;
+  }
+  if (r.status != QpStatus::Optimal) return out;
+  out.feasible = true;
+  out.path = path_of(ws.qp_workspace, qp.steps);
+  out.objective = qp.objective(out.path);
+  return out;
+}
+
+// The node's QP; without the x and theta bounds unless its solution breaks one.
+NodeOutcome solve_node(const LaneChangeQp& qp, const std::vector<int>& modes, FastWorkspace& ws) {
+  NodeOutcome out = solve_node_with(qp, modes, false, ws);
+  if (out.feasible && !within_x_theta_bounds(qp, out.path)) {
+    out = solve_node_with(qp, modes, true, ws);
+  }
+  return out;
+}
+
+// The free node whose relaxed state violates all its modes the most, or -1.
+int branching_node(const LaneChangeQp& qp, const std::vector<int>& modes, const Iterate& path) {
+  int chosen = -1;
+  double most = kModeTolerance;
+  for (int k = 1; k <= qp.steps; ++k) {
+    if (modes[k] != kFree || qp.node_modes[k].empty()) continue;
+    double least = kInfinity;
+    for (const LaneMode& m : qp.node_modes[k])
+      least = std::min(least, mode_violation(m, path.states[k]));
+    if (least > most) {
+      most = least;
+      chosen = k;
+    }
+  }
+  return chosen;
+}
+
+// The modes that a feasible path satisfies, node by node.
+std::vector<int> modes_of(const LaneChangeQp& qp, const Iterate& path) {
+  std::vector<int> modes(qp.steps + 1, kFree);
+  for (int k = 0; k <= qp.steps; ++k) {
+    if (!qp.node_modes[k].empty()) modes[k] = qp.best_mode(path, k);
+  }
+  return modes;
+}
+
+using Clock = std::chrono::steady_clock;
+
+// Moves each lane switch of a complete mode sequence one node earlier or
+// later while that lowers the objective: a cheap way to an incumbent close to
+// the optimum, which lets the search prune most of its tree.
+template <class Accept>
+void improve_switches(const LaneChangeQp& qp, std::vector<int> modes, double objective,
+                      FastWorkspace& ws, long& nodes, Accept&& accept) {
+  std::vector<int> trial;
+  for (bool improved = true; improved;) {
+    improved = false;
+    for (int j = 2; j <= qp.steps && !improved; ++j) {
+      if (modes[j] == modes[j - 1]) continue;
+      for (int move = 0; move < 2 && !improved; ++move) {
+        trial = modes;
+        if (move == 0) trial[j] = modes[j - 1];  // switch one node later
+        if (move == 1) trial[j - 1] = modes[j];  // switch one node earlier
+        NodeOutcome o = solve_node(qp, trial, ws);
+        ++nodes;
+        if (o.feasible && o.objective < objective - 1e-12) {
+          objective = o.objective;
+          modes = trial;
+          accept(o);
+          improved = true;
+        }
+      }
+    }
+  }
+}
+
+// A complete mode sequence from a path: at each node, the mode it comes closest to.
+std::vector<int> rounded_modes(const LaneChangeQp& qp, const Iterate& path) {
+  std::vector<int> modes(qp.steps + 1, kFree);
+  for (int k = 1; k <= qp.steps; ++k) {
+    if (!qp.node_modes[k].empty()) modes[k] = qp.best_mode(path, k);
+  }
+  return modes;
+}
+
+}  // namespace
+
+std::unique_ptr<LaneChangeWorkspace> FastLaneChangeSolver::make_workspace() const {
+  return std::make_unique<FastWorkspace>();
+}
+
+LaneChangeSolution FastLaneChangeSolver::solve(const LaneChangeQp& qp, const MiqpSettings& settings,
+                                               const SolveHints& hints) const {
+  const auto start = Clock::now();
+  std::unique_ptr<LaneChangeWorkspace> owned;
+  auto* ws = dynamic_cast<FastWorkspace*>(hints.workspace);
+  if (ws == nullptr) {
+    owned = make_workspace();
+    ws = static_cast<FastWorkspace*>(owned.get());
+  }
+  LaneChangeSolution out;
+  const int n = qp.steps;
+  // The initial state is given: some mode of node 0 must already hold.
+  if (!qp.node_modes[0].empty()) {
+    bool holds = false;
+    for (const LaneMode& m : qp.node_modes[0])
+      holds = holds || mode_violation(m, qp.initial_state) <= kModeTolerance;
+    if (!holds) {
+      out.status = MiqpStatus::Infeasible;
+      out.message = "the initial state breaks the lane rules";
+      return out;
+    }
+  }
+  build_base(qp, ws->base);
+  ws->node = ws->base;
+  ws->start_controls.assign(n, Control::Zero());
+  if (hints.controls != nullptr && static_cast<int>(hints.controls->size()) == n) {
+    ws->start_controls = *hints.controls;
+  }
+  // Strictly inside the control bounds, which are the only hard rows.
+  const Control margin = 1e-3 * (qp.control_upper - qp.control_lower);
+  for (Control& u : ws->start_controls) {
+    u = u.cwiseMax(qp.control_lower + margin).cwiseMin(qp.control_upper - margin);
+  }
+  double incumbent = kInfinity;
+  auto accept = [&](NodeOutcome& o) {
+    if (o.objective < incumbent) {
+      incumbent = o.objective;
+      out.path = std::move(o.path);
+      out.objective = incumbent;
+    }
+  };
+  bool numerical_trouble = false;
+  // Incumbents first: the hinted modes, and the rounded root relaxation, each
+  // improved by moving its lane switches.
+  std::vector<int> root_modes(n + 1, kFree);
+  NodeOutcome root = solve_node(qp, root_modes, *ws);
+  ++out.nodes;
+  if (root.feasible) {
+    for (int attempt = 0; attempt < 2; ++attempt) {
+      std::vector<int> start;
+      if (attempt == 0 && hints.modes != nullptr &&
+          static_cast<int>(hints.modes->size()) == n + 1) {
+        start = *hints.modes;
+      } else if (attempt == 1) {
+        start = rounded_modes(qp, root.path);
+        if (hints.modes != nullptr && start == *hints.modes) continue;
+      } else {
+        continue;
+      }
+      NodeOutcome o = solve_node(qp, start, *ws);
+      ++out.nodes;
+      if (!o.feasible) continue;
+      const double objective = o.objective;
+      accept(o);
+      improve_switches(qp, start, objective, *ws, out.nodes, accept);
+    }
+  }
+  ws->stack.clear();
+  numerical_trouble = root.numerical_failure;
+  bool root_pending = root.feasible;
+  const double gap_of = settings.absolute_gap;
+  while (root_pending || !ws->stack.empty()) {
+    const double elapsed = std::chrono::duration<double>(Clock::now() - start).count();
+    if (elapsed > settings.time_limit_s || out.nodes >= settings.node_limit) {
+      out.status = elapsed > settings.time_limit_s ? MiqpStatus::TimeLimit : MiqpStatus::NodeLimit;
+      out.solve_ms = elapsed * 1000.0;
+      if (out.has_solution()) out.modes = modes_of(qp, out.path);
+      return out;
+    }
+    std::vector<int> modes;
+    NodeOutcome o;
+    if (root_pending) {
+      modes = root_modes;
+      o = std::move(root);
+      root_pending = false;
+    } else {
+      modes = std::move(ws->stack.back());
+      ws->stack.pop_back();
+      o = solve_node(qp, modes, *ws);
+      ++out.nodes;
+    }
+    numerical_trouble = numerical_trouble || o.numerical_failure;
+    if (!o.feasible) continue;
+    const double cutoff = incumbent - std::max(gap_of, settings.relative_gap * std::abs(incumbent));
+    if (o.objective >= cutoff) continue;
+    const int k = branching_node(qp, modes, o.path);
+    if (k < 0) {
+      accept(o);
+      continue;
+    }
+    // Children in order of how far the relaxed state is from each mode; the
+    // nearest is pushed last so that it is explored first.
+    const auto& options = qp.node_modes[k];
+    std::vector<std::pair<double, int>> order;
+    for (int m = 0; m < static_cast<int>(options.size()); ++m) {
+      order.emplace_back(mode_violation(options[m], o.path.states[k]), m);
+    }
+    std::sort(order.begin(), order.end(), std::greater<>());
+    for (const auto& [violation, m] : order) {
+      std::vector<int> child = modes;
+      child[k] = m;
+      ws->stack.push_back(std::move(child));
+    }
+  }
+  out.solve_ms = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+  if (out.has_solution()) {
+    out.status = MiqpStatus::Optimal;
+    out.modes = modes_of(qp, out.path);
+  } else {
+    out.status = numerical_trouble ? MiqpStatus::NumericalError : MiqpStatus::Infeasible;
+    out.message = numerical_trouble ? "a QP relaxation failed" : "no lane sequence is feasible";
+  }
+  return out;
+}
+
+}  // namespace lanechange::expert

@@ -1,0 +1,374 @@
+#include "lanechange/expert/formulation.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+namespace lanechange::expert {
+
+std::string_view to_string(LaneOccupancy occupancy) {
+  switch (occupancy) {
+    case LaneOccupancy::EgoLane: return "ego_lane";
+    case LaneOccupancy::BothLanes: return "both_lanes";
+    case LaneOccupancy::TargetLane: return "target_lane";
+  }
+  return "?";
+}
+
+namespace {
+
+// Linearization of (v cos theta, v sin theta) at (v_bar, theta_bar): each is
+// dv * v + dtheta * theta + constant.
+struct VelocityLinearization {
+  double x_dv, x_dtheta, x_const;
+  double y_dv, y_dtheta, y_const;
+};
+
+VelocityLinearization linearize_velocity(double v_bar, double theta_bar) {
+  const double c = std::cos(theta_bar);
+  const double s = std::sin(theta_bar);
+  return {c, -v_bar * s, v_bar * theta_bar * s, s, v_bar * c, -v_bar * theta_bar * c};
+}
+
+// v and theta take the exact step of a held control; x and y the trapezoid
+// of the two linearized velocities, with v_{k+1} and theta_{k+1} substituted
+// so that the step is explicit in (z_k, u_k).
+StageDynamics trapezoid_step(const State& at_k, const State& at_next, double dt) {
+  const auto l0 = linearize_velocity(at_k[kV], at_k[kTheta]);
+  const auto l1 = linearize_velocity(at_next[kV], at_next[kTheta]);
+  StageDynamics d;
+  d.A.setIdentity();
+  d.B.setZero();
+  d.c.setZero();
+  const double h = 0.5 * dt;
+  d.A(kX, kV) = h * (l0.x_dv + l1.x_dv);
+  d.A(kX, kTheta) = h * (l0.x_dtheta + l1.x_dtheta);
+  d.B(kX, kA) = h * dt * l1.x_dv;
+  d.B(kX, kOmega) = h * dt * l1.x_dtheta;
+  d.c(kX) = h * (l0.x_const + l1.x_const);
+  d.A(kY, kV) = h * (l0.y_dv + l1.y_dv);
+  d.A(kY, kTheta) = h * (l0.y_dtheta + l1.y_dtheta);
+  d.B(kY, kA) = h * dt * l1.y_dv;
+  d.B(kY, kOmega) = h * dt * l1.y_dtheta;
+  d.c(kY) = h * (l0.y_const + l1.y_const);
+  d.B(kV, kA) = dt;
+  d.B(kTheta, kOmega) = dt;
+  return d;
+}
+
+HalfSpace row(double gx, double gy, double gv, double upper) {
+  HalfSpace h;
+  h.g << gx, gy, gv, 0.0;
+  h.upper = upper;
+  return h;
+}
+
+// The rows of Eq. 1 at one node, against the cars' positions there.
+struct CarRows {
+  HalfSpace behind_leader, ahead_of_follower, behind_target;
+};
+
+CarRows car_rows(const Scenario& s, const TrafficPrediction& p, int index) {
+  const SafetyMargins& d = s.safe_distance;
+  const double follower_v = p.car(Car::Follower).v[index];
+  return {row(1.0, 0.0, d.leader.time_headway, p.car(Car::Leader).x[index] - d.leader.standstill),
+          row(-1.0, 0.0, 0.0,
+              -(p.car(Car::Follower).x[index] + d.follower.standstill +
+                d.follower.time_headway * follower_v)),
+          row(1.0, 0.0, d.target.time_headway, p.car(Car::Target).x[index] - d.target.standstill)};
+}
+
+std::vector<LaneMode> lane_modes(const CarRows& r, LaneRule rule, double boundary,
+                                 double half_width) {
+  if (rule == LaneRule::EitherOr) {
+    return {{LaneOccupancy::EgoLane, {r.behind_leader, row(0, 1, 0, boundary)}},
+            {LaneOccupancy::TargetLane,
+             {r.ahead_of_follower, r.behind_target, row(0, -1, 0, -boundary)}}};
+  }
+  // Footprint: the body is in every lane it touches. Touching both lanes
+  // needs every row; the y rows of the one-lane modes keep the body clear of
+  // the lane line.
+  return {{LaneOccupancy::EgoLane, {r.behind_leader, row(0, 1, 0, boundary - half_width)}},
+          {LaneOccupancy::BothLanes, {r.behind_leader, r.ahead_of_follower, r.behind_target}},
+          {LaneOccupancy::TargetLane,
+           {r.ahead_of_follower, r.behind_target, row(0, -1, 0, -(boundary + half_width))}}};
+}
+
+double terminal_aim(const Scenario& s, const Config& c, const TrafficPrediction& p) {
+  const CarTrack& target = p.car(Car::Target);
+  if (!c.expert.aim_behind_target) return target.x.back();
+  const SafeDistance& d = s.safe_distance.target;
+  const double ego_speed = std::min(target.v.back(), s.limits.v.hi);
+  return target.x.back() - d.standstill - d.time_headway * ego_speed;
+}
+
+}  // namespace
+
+LaneChangeQp build_lane_change_qp(const Scenario& s, const Config& config, const Iterate& point,
+                                  const TrafficPrediction& prediction) {
+  const ExpertSettings& e = config.expert;
+  LaneChangeQp qp;
+  qp.steps = s.steps;
+  qp.dt = s.horizon / s.steps;
+  const int n = qp.steps;
+  qp.initial_state << s.ego.x, s.ego.y, s.ego.v, s.ego.theta;
+  qp.dynamics.reserve(n);
+  for (int k = 0; k < n; ++k) {
+    qp.dynamics.push_back(trapezoid_step(point.states[k], point.states[k + 1], qp.dt));
+  }
+  qp.accel_weight = e.weight_accel * qp.dt;
+  qp.jerk_weight =
+      e.jerk_weighting == JerkWeighting::Derivative ? e.weight_jerk / qp.dt : e.weight_jerk * qp.dt;
+  // Left Riemann sum of c3 (y - w)^2 dt, as the authors' code sums it.
+  qp.lateral_weight.assign(n + 1, e.weight_lateral * qp.dt);
+  qp.lateral_weight[n] = 0.0;
+  qp.lateral_reference = s.lane_width;
+  qp.terminal_x_weight = e.weight_terminal_x;
+  qp.terminal_x_reference = terminal_aim(s, config, prediction);
+  // x has no bound of its own; these never bind and give the big-M rows a box.
+  constexpr double kXSlack = 50.0;
+  for (int k = 0; k <= n; ++k) {
+    const double t = k * qp.dt;
+    State lo, hi;
+    lo << s.ego.x - kXSlack, -s.limits.lateral_margin, s.limits.v.lo, -std::numbers::pi / 2;
+    hi << s.ego.x + s.limits.v.hi * t + kXSlack, s.lane_width + s.limits.lateral_margin,
+        s.limits.v.hi, std::numbers::pi / 2;
+    qp.state_lower.push_back(lo);
+    qp.state_upper.push_back(hi);
+  }
+  qp.control_lower << s.limits.a.lo, s.limits.omega.lo;
+  qp.control_upper << s.limits.a.hi, s.limits.omega.hi;
+  qp.terminal_lateral_fixed = e.fix_terminal_lateral;
+  qp.node_modes.assign(n + 1, {});
+  const int last_prediction = prediction.nodes() - 1;
+  for (int k = e.constrain_initial_node ? 0 : 1; k <= n; ++k) {
+    const int index = std::min(k + e.prediction_lead_steps, last_prediction);
+    qp.node_modes[k] = lane_modes(car_rows(s, prediction, index), e.lane_rule, 0.5 * s.lane_width,
+                                  0.5 * s.vehicle.width);
+  }
+  return qp;
+}
+
+double LaneChangeQp::objective(const Iterate& path) const {
+  double total = 0.0;
+  for (int k = 0; k < steps; ++k)
+    total += accel_weight * path.controls[k][kA] * path.controls[k][kA];
+  for (int k = 0; k + 1 < steps; ++k) {
+    const double jerk = path.controls[k + 1][kA] - path.controls[k][kA];
+    total += jerk_weight * jerk * jerk;
+  }
+  for (int k = 0; k <= steps; ++k) {
+    const double dy = path.states[k][kY] - lateral_reference;
+    total += lateral_weight[k] * dy * dy;
+  }
+  const double dx = path.states[steps][kX] - terminal_x_reference;
+  return total + terminal_x_weight * dx * dx;
+}
+
+namespace {
+
+double mode_violation(const LaneMode& mode, const State& z) {
+  double worst = 0.0;
+  for (const HalfSpace& h : mode.rows) worst = std::max(worst, h.g.dot(z) - h.upper);
+  return worst;
+}
+
+}  // namespace
+
+int LaneChangeQp::best_mode(const Iterate& path, int node) const {
+  const auto& modes = node_modes[node];
+  int best = -1;
+  double best_violation = kInfinity;
+  for (int m = 0; m < static_cast<int>(modes.size()); ++m) {
+    const double v = mode_violation(modes[m], path.states[node]);
+    if (v < best_violation) {
+      best_violation = v;
+      best = m;
+    }
+  }
+  return best;
+}
+
+double LaneChangeQp::max_violation(const Iterate& path) const {
+  double worst = (path.states[0] - initial_state).cwiseAbs().maxCoeff();
+  for (int k = 0; k < steps; ++k) {
+    const StageDynamics& d = dynamics[k];
+    const State next = d.A * path.states[k] + d.B * path.controls[k] + d.c;
+    worst = std::max(worst, (next - path.states[k + 1]).cwiseAbs().maxCoeff());
+    worst = std::max(worst, (control_lower - path.controls[k]).maxCoeff());
+    worst = std::max(worst, (path.controls[k] - control_upper).maxCoeff());
+  }
+  for (int k = 1; k <= steps; ++k) {
+    worst = std::max(worst, (state_lower[k] - path.states[k]).maxCoeff());
+    worst = std::max(worst, (path.states[k] - state_upper[k]).maxCoeff());
+  }
+  for (int k = 0; k <= steps; ++k) {
+    const int m = best_mode(path, k);
+    if (m >= 0) worst = std::max(worst, mode_violation(node_modes[k][m], path.states[k]));
+  }
+  if (terminal_lateral_fixed) {
+    worst = std::max(worst, std::abs(path.states[steps][kY] - lateral_reference));
+  }
+  return worst;
+}
+
+namespace {
+
+// The most a row g'z <= upper can be violated over the box [lo, hi].
+double largest_excess(const HalfSpace& h, const State& lo, const State& hi) {
+  double most = -h.upper;
+  for (int i = 0; i < 4; ++i) most += std::max(h.g[i] * lo[i], h.g[i] * hi[i]);
+  return most;
+}
+
+using Triplets = std::vector<Eigen::Triplet<double>>;
+
+struct RowBuilder {
+  Triplets entries;
+  std::vector<double> lower, upper;
+  int add(double lo, double hi) {
+    lower.push_back(lo);
+    upper.push_back(hi);
+    return static_cast<int>(lower.size()) - 1;
+  }
+};
+
+void add_dynamics_rows(const LaneChangeQp& qp, const MiqpLayout& at, RowBuilder& rows) {
+  for (int k = 0; k < qp.steps; ++k) {
+    const StageDynamics& d = qp.dynamics[k];
+    for (int i = 0; i < 4; ++i) {
+      const int r = rows.add(d.c[i], d.c[i]);
+      rows.entries.emplace_back(r, at.state(k + 1, i), 1.0);
+      for (int j = 0; j < 4; ++j) {
+        if (d.A(i, j) != 0.0) rows.entries.emplace_back(r, at.state(k, j), -d.A(i, j));
+      }
+      for (int j = 0; j < 2; ++j) {
+        if (d.B(i, j) != 0.0) rows.entries.emplace_back(r, at.control(k, j), -d.B(i, j));
+      }
+    }
+  }
+}
+
+void add_lane_rows(const LaneChangeQp& qp, double big_m, const MiqpLayout& at, RowBuilder& rows) {
+  for (int k = 0; k <= qp.steps; ++k) {
+    const auto& modes = qp.node_modes[k];
+    if (modes.empty()) continue;
+    const State lo = k == 0 ? qp.initial_state : qp.state_lower[k];
+    const State hi = k == 0 ? qp.initial_state : qp.state_upper[k];
+    const int choose_one = rows.add(1.0, 1.0);
+    for (int m = 0; m < static_cast<int>(modes.size()); ++m) {
+      rows.entries.emplace_back(choose_one, at.mode(k, m), 1.0);
+      for (const HalfSpace& h : modes[m].rows) {
+        const double excess = largest_excess(h, lo, hi);
+        if (excess <= 0.0) continue;  // holds everywhere in the box
+        // g'z + M delta <= upper + M: the row binds when delta = 1.
+        const double m_row = std::min(big_m, excess);
+        const int r = rows.add(-kInfinity, h.upper + m_row);
+        for (int i = 0; i < 4; ++i) {
+          if (h.g[i] != 0.0) rows.entries.emplace_back(r, at.state(k, i), h.g[i]);
+        }
+        rows.entries.emplace_back(r, at.mode(k, m), m_row);
+      }
+    }
+  }
+}
+
+void add_objective(const LaneChangeQp& qp, const MiqpLayout& at, MiqpProblem& p) {
+  Triplets h;
+  const int n = qp.steps;
+  for (int k = 0; k < n; ++k)
+    h.emplace_back(at.control(k, kA), at.control(k, kA), 2.0 * qp.accel_weight);
+  for (int k = 0; k + 1 < n; ++k) {
+    const int a0 = at.control(k, kA);
+    const int a1 = at.control(k + 1, kA);
+    const double w = 2.0 * qp.jerk_weight;
+    h.emplace_back(a0, a0, w);
+    h.emplace_back(a1, a1, w);
+    h.emplace_back(a0, a1, -w);
+    h.emplace_back(a1, a0, -w);
+  }
+  for (int k = 0; k <= n; ++k) {
+    const double w = qp.lateral_weight[k];
+    if (w == 0.0) continue;
+    const int y = at.state(k, kY);
+    h.emplace_back(y, y, 2.0 * w);
+    p.gradient[y] -= 2.0 * w * qp.lateral_reference;
+    p.constant += w * qp.lateral_reference * qp.lateral_reference;
+  }
+  if (qp.terminal_x_weight > 0.0) {
+    const int x = at.state(n, kX);
+    h.emplace_back(x, x, 2.0 * qp.terminal_x_weight);
+    p.gradient[x] -= 2.0 * qp.terminal_x_weight * qp.terminal_x_reference;
+    p.constant += qp.terminal_x_weight * qp.terminal_x_reference * qp.terminal_x_reference;
+  }
+  p.hessian.setFromTriplets(h.begin(), h.end());
+}
+
+void set_bounds(const LaneChangeQp& qp, const MiqpLayout& at, MiqpProblem& p) {
+  const int n = qp.steps;
+  for (int i = 0; i < 4; ++i) {
+    p.col_lower[at.state(0, i)] = p.col_upper[at.state(0, i)] = qp.initial_state[i];
+    for (int k = 1; k <= n; ++k) {
+      p.col_lower[at.state(k, i)] = qp.state_lower[k][i];
+      p.col_upper[at.state(k, i)] = qp.state_upper[k][i];
+    }
+  }
+  if (qp.terminal_lateral_fixed) {
+    p.col_lower[at.state(n, kY)] = p.col_upper[at.state(n, kY)] = qp.lateral_reference;
+  }
+  for (int k = 0; k < n; ++k) {
+    for (int j = 0; j < 2; ++j) {
+      p.col_lower[at.control(k, j)] = qp.control_lower[j];
+      p.col_upper[at.control(k, j)] = qp.control_upper[j];
+    }
+  }
+  for (int b = at.mode_offset[0]; b < at.size(); ++b) {
+    p.col_lower[b] = 0.0;
+    p.col_upper[b] = 1.0;
+    p.kinds[b] = VariableKind::Binary;
+  }
+}
+
+}  // namespace
+
+MiqpProblem to_miqp(const LaneChangeQp& qp, double big_m, MiqpLayout& layout) {
+  const int n = qp.steps;
+  layout.steps = n;
+  layout.mode_offset.assign(n + 2, 0);
+  layout.mode_offset[0] = 4 * (n + 1) + 2 * n;
+  for (int k = 0; k <= n; ++k) {
+    layout.mode_offset[k + 1] = layout.mode_offset[k] + static_cast<int>(qp.node_modes[k].size());
+  }
+  const int size = layout.size();
+  MiqpProblem p;
+  p.gradient = Eigen::VectorXd::Zero(size);
+  p.hessian.resize(size, size);
+  p.col_lower = Eigen::VectorXd::Constant(size, -kInfinity);
+  p.col_upper = Eigen::VectorXd::Constant(size, kInfinity);
+  p.kinds.assign(size, VariableKind::Continuous);
+  add_objective(qp, layout, p);
+  set_bounds(qp, layout, p);
+  RowBuilder rows;
+  add_dynamics_rows(qp, layout, rows);
+  add_lane_rows(qp, big_m, layout, rows);
+  const int m = static_cast<int>(rows.lower.size());
+  p.constraints.resize(m, size);
+  p.constraints.setFromTriplets(rows.entries.begin(), rows.entries.end());
+  p.row_lower = Eigen::Map<Eigen::VectorXd>(rows.lower.data(), m);
+  p.row_upper = Eigen::Map<Eigen::VectorXd>(rows.upper.data(), m);
+  return p;
+}
+
+Iterate iterate_from_miqp(const Eigen::VectorXd& x, const MiqpLayout& at) {
+  Iterate path;
+  for (int k = 0; k <= at.steps; ++k) {
+    path.states.emplace_back(x[at.state(k, kX)], x[at.state(k, kY)], x[at.state(k, kV)],
+                             x[at.state(k, kTheta)]);
+  }
+  for (int k = 0; k < at.steps; ++k) {
+    path.controls.emplace_back(x[at.control(k, kA)], x[at.control(k, kOmega)]);
+  }
+  return path;
+}
+
+}  // namespace lanechange::expert

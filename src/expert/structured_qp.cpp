@@ -1,0 +1,455 @@
+#include "lanechange/expert/structured_qp.hpp"
+
+#include <Eigen/Cholesky>
+#include <algorithm>
+#include <cmath>
+
+namespace lanechange::expert {
+
+using StateMatrix = Eigen::Matrix<double, kQpStates, kQpStates>;
+using GainMatrix = Eigen::Matrix<double, kQpControls, kQpStates>;
+
+void QpWorkspace::setup(const StructuredQp& qp) {
+  const int stages = qp.steps() + 1;
+  row_offset_.assign(stages + 1, 0);
+  for (int k = 0; k < stages; ++k) {
+    row_offset_[k + 1] = row_offset_[k] + static_cast<int>(qp.stages[k].rows.size());
+  }
+  const std::size_t rows = row_offset_.back();
+  single_index_.assign(rows, -1);
+  for (int k = 0; k < stages; ++k) {
+    for (std::size_t j = 0; j < qp.stages[k].rows.size(); ++j) {
+      const QpStageVector& g = qp.stages[k].rows[j].g;
+      int nonzeros = 0;
+      int last = -1;
+      for (int i = 0; i < kQpStage; ++i) {
+        if (g[i] != 0.0) {
+          ++nonzeros;
+          last = i;
+        }
+      }
+      if (nonzeros == 1) single_index_[row_offset_[k] + j] = last;
+    }
+  }
+  for (auto* v : {&w_, &dw_, &grad_, &grad_base_, &dw_unit_})
+    v->assign(stages, QpStageVector::Zero());
+  hess_.assign(stages, QpStageMatrix::Zero());
+  gain_.assign(stages, GainMatrix::Zero());
+  sbar_.assign(stages, GainMatrix::Zero());
+  rbar_inverse_.assign(stages, Eigen::Matrix2d::Zero());
+  costate_.assign(stages + 1, QpStateVector::Zero());
+  feedforward_.assign(stages, Eigen::Vector2d::Zero());
+  if (initial_controls_.size() != static_cast<std::size_t>(stages)) {
+    initial_controls_.assign(stages, Eigen::Vector2d::Zero());
+  }
+  for (auto* v :
+       {&t_, &lambda_, &sigma_, &lambda_soft_, &dt_, &dlambda_, &dsigma_, &dlambda_soft_, &weight_,
+        &offset_, &soft_q_, &dt_aff_, &dlambda_aff_, &dsigma_aff_, &dlambda_soft_aff_}) {
+    v->assign(rows, 0.0);
+  }
+}
+
+void QpWorkspace::set_initial_controls(const std::vector<Eigen::Vector2d>& controls) {
+  initial_controls_.assign(controls.begin(), controls.end());
+  initial_controls_.resize(controls.size() + 1, Eigen::Vector2d::Zero());
+}
+
+// The steps of the method, over the workspace's vectors. Rows are
+//   hard: g'w + t = d,            t >= 0, lambda >= 0, lambda t = mu
+//   soft: g'w - sigma + t = d,    also sigma >= 0, rho - lambda - lambda_soft = 0,
+//                                 lambda_soft sigma = mu
+// and each Newton step eliminates t, sigma and the multipliers row by row,
+// leaving an LQ problem in w that the Riccati recursion solves.
+constexpr double kInfinityResidual = 1e300;
+
+struct InteriorPointMethod {
+  const StructuredQp& qp;
+  QpWorkspace& ws;
+  const QpSettings& settings;
+  int n = qp.steps();
+  int total_rows = ws.row_offset_.back();
+
+  template <class F>
+  void for_each_row(F&& f) {
+    for (int k = 0; k <= n; ++k) {
+      const auto& rows = qp.stages[k].rows;
+      for (int j = 0; j < static_cast<int>(rows.size()); ++j) f(k, rows[j], ws.row_offset_[k] + j);
+    }
+  }
+
+  void initialize() {
+    ws.w_[0].head<kQpStates>() = qp.initial_state;
+    ws.terminal_multiplier_ = 0.0;
+    for (int k = 0; k <= n; ++k) {
+      if (k < n) ws.w_[k].tail<kQpControls>() = ws.initial_controls_[k];
+      if (k == n) ws.w_[k].tail<kQpControls>().setZero();
+      if (k < n) {
+        const QpStage& st = qp.stages[k];
+        ws.w_[k + 1].head<kQpStates>() =
+            st.A * ws.w_[k].head<kQpStates>() + st.B * ws.w_[k].tail<kQpControls>() + st.c;
+      }
+    }
+    // Soft rows start on rho = lambda + lambda_soft: a residual there would
+    // swamp the Newton step with forces of the size of rho.
+    for_each_row([&](int k, const QpRow& row, int i) {
+      const double room = row.d - row_dot(row, i, ws.w_[k]);
+      ws.lambda_[i] = 1.0;
+      if (row.soft) {
+        ws.lambda_soft_[i] = qp.softness_weight - 1.0;
+        ws.sigma_[i] = std::max(-room, 0.0) + 1.0 / ws.lambda_soft_[i];
+        ws.t_[i] = std::max(room + ws.sigma_[i], 1e-2);
+      } else {
+        ws.t_[i] = std::max(room, 1.0);
+      }
+    });
+  }
+
+  // g' v for row i, cheap for the bound rows that have one nonzero.
+  [[nodiscard]] double row_dot(const QpRow& row, int i, const QpStageVector& v) const {
+    const int j = ws.single_index_[i];
+    return j >= 0 ? row.g[j] * v[j] : row.g.dot(v);
+  }
+
+  void add_row_times(const QpRow& row, int i, double scale, QpStageVector& out) const {
+    const int j = ws.single_index_[i];
+    if (j >= 0) {
+      out[j] += row.g[j] * scale;
+    } else {
+      out += row.g * scale;
+    }
+  }
+
+  [[nodiscard]] double primal_residual(const QpRow& row, int k, int i) const {
+    const double r = row_dot(row, i, ws.w_[k]) + ws.t_[i] - row.d;
+    return row.soft ? r - ws.sigma_[i] : r;
+  }
+
+  [[nodiscard]] double mean_complementarity() const {
+    double sum = 0.0;
+    int count = 0;
+    for (int k = 0; k <= n; ++k) {
+      for (int j = 0; j < static_cast<int>(qp.stages[k].rows.size()); ++j) {
+        const int i = ws.row_offset_[k] + j;
+        sum += ws.lambda_[i] * ws.t_[i];
+        ++count;
+        if (qp.stages[k].rows[j].soft) {
+          sum += ws.lambda_soft_[i] * ws.sigma_[i];
+          ++count;
+        }
+      }
+    }
+    return count > 0 ? sum / count : 0.0;
+  }
+
+  // Gradient of the Lagrangian without the dynamics: H w + h + sum g lambda.
+  // Once per iteration: the predictor and the corrector start from it.
+  void lagrangian_gradient() {
+    for (int k = 0; k <= n; ++k) {
+      ws.grad_base_[k] = qp.stages[k].H * ws.w_[k] + qp.stages[k].h;
+    }
+    if (qp.has_terminal_equality) ws.grad_base_[n] += qp.terminal_g * ws.terminal_multiplier_;
+    for_each_row([&](int k, const QpRow& row, int i) {
+      add_row_times(row, i, ws.lambda_[i], ws.grad_base_[k]);
+    });
+  }
+
+  // The costates that make the state part of stationarity hold; what is
+  // left over in the control part is the dual residual.
+  // Needs lagrangian_gradient() first.
+  [[nodiscard]] double dual_residual() {
+    auto& nu = ws.costate_;
+    nu[n] = -ws.grad_base_[n].head<kQpStates>();
+    double worst = 0.0;
+    for (int k = n - 1; k >= 0; --k) {
+      const QpStage& st = qp.stages[k];
+      const Eigen::Vector2d r = ws.grad_base_[k].tail<kQpControls>() - st.B.transpose() * nu[k + 1];
+      worst = std::max(worst, r.cwiseAbs().maxCoeff());
+      nu[k] = -ws.grad_base_[k].head<kQpStates>() + st.A.transpose() * nu[k + 1];
+    }
+    return worst;
+  }
+
+  // Row weights of the eliminated Newton system (the same for predictor and corrector).
+  void row_weights() {
+    for (int k = 0; k <= n; ++k) ws.hess_[k] = qp.stages[k].H;
+    for_each_row([&](int k, const QpRow& row, int i) {
+      const double a = ws.lambda_[i] / ws.t_[i];
+      double weight = a;
+      if (row.soft) {
+        const double b = ws.lambda_soft_[i] / ws.sigma_[i];
+        weight = a * b / (a + b);
+      }
+      ws.weight_[i] = weight;
+      const int j = ws.single_index_[i];
+      if (j >= 0) {
+        ws.hess_[k](j, j) += weight * row.g[j] * row.g[j];
+      } else {
+        ws.hess_[k].noalias() += weight * row.g * row.g.transpose();
+      }
+    });
+  }
+
+  // Right-hand sides for complementarity targets c4 (lambda t) and c5
+  // (lambda_soft sigma), given per row by the callables.
+  template <class C4, class C5>
+  void newton_gradient(C4&& c4_of, C5&& c5_of) {
+    for (int k = 0; k <= n; ++k) ws.grad_[k] = ws.grad_base_[k];
+    for_each_row([&](int k, const QpRow& row, int i) {
+      const double r1 = primal_residual(row, k, i);
+      const double a = ws.lambda_[i] / ws.t_[i];
+      const double c4 = c4_of(i);
+      double e = c4 / ws.t_[i] + a * r1;
+      if (row.soft) {
+        const double b = ws.lambda_soft_[i] / ws.sigma_[i];
+        const double r3 = qp.softness_weight - ws.lambda_[i] - ws.lambda_soft_[i];
+        const double q = c4 / ws.t_[i] + a * r1 + c5_of(i) / ws.sigma_[i] - r3;
+        ws.soft_q_[i] = q;
+        e -= a * q / (a + b);
+      }
+      ws.offset_[i] = e;
+      add_row_times(row, i, e, ws.grad_[k]);
+    });
+  }
+
+  // Riccati backward pass in square-root form: the stage matrix
+  //   M = [R S; S' Q] + [B A]' P [B A]   (controls first)
+  // is factored by Cholesky, and the next P is L22 L22', positive
+  // semidefinite by construction. The textbook update Q + A'PA - S'R^-1 S
+  // loses that to cancellation once the barrier weights grow large.
+  [[nodiscard]] bool factorize() {
+    StateMatrix P = ws.hess_[n].topLeftCorner<kQpStates, kQpStates>();
+    P = 0.5 * (P + P.transpose());
+    Eigen::Matrix<double, kQpStage, kQpStage> M;
+    for (int k = n - 1; k >= 0; --k) {
+      const QpStage& st = qp.stages[k];
+      const auto& H = ws.hess_[k];
+      const Eigen::Matrix<double, kQpStates, kQpControls> PB = P * st.B;
+      const StateMatrix PA = P * st.A;
+      M.topLeftCorner<kQpControls, kQpControls>() =
+          H.bottomRightCorner<kQpControls, kQpControls>() + st.B.transpose() * PB;
+      M.topRightCorner<kQpControls, kQpStates>() =
+          H.bottomLeftCorner<kQpControls, kQpStates>() + PB.transpose() * st.A;
+      M.bottomLeftCorner<kQpStates, kQpControls>() =
+          M.topRightCorner<kQpControls, kQpStates>().transpose();
+      M.bottomRightCorner<kQpStates, kQpStates>() =
+          H.topLeftCorner<kQpStates, kQpStates>() + st.A.transpose() * PA;
+      Eigen::LLT<Eigen::Matrix<double, kQpStage, kQpStage>> llt(M);
+      for (double shift = 1e-12; llt.info() != Eigen::Success; shift *= 100.0) {
+        if (shift > 1e-2) return false;
+        const double scale = M.diagonal().cwiseAbs().maxCoeff();
+        llt.compute(M + Eigen::Matrix<double, kQpStage, kQpStage>::Identity() * shift * scale);
+      }
+      const auto L = llt.matrixL().toDenseMatrix();
+      const Eigen::Matrix2d L11 = L.topLeftCorner<kQpControls, kQpControls>();
+      Eigen::Matrix2d L11_inverse;
+      L11_inverse << 1.0 / L11(0, 0), 0.0, -L11(1, 0) / (L11(0, 0) * L11(1, 1)), 1.0 / L11(1, 1);
+      ws.rbar_inverse_[k] = L11_inverse.transpose() * L11_inverse;
+      ws.sbar_[k] = M.topRightCorner<kQpControls, kQpStates>();
+      ws.gain_[k] = -ws.rbar_inverse_[k] * ws.sbar_[k];
+      const StateMatrix L22 = L.bottomRightCorner<kQpStates, kQpStates>();
+      P.noalias() = L22 * L22.transpose();
+    }
+    return true;
+  }
+
+  // The LQ solve with the stored factorization: out = K^-1 (-gradient) on
+  // the space of trajectories with homogeneous dynamics and s_0 fixed.
+  void back_substitute(const std::vector<QpStageVector>& gradient,
+                       std::vector<QpStageVector>& out) {
+    QpStateVector p = gradient[n].head<kQpStates>();
+    for (int k = n - 1; k >= 0; --k) {
+      const QpStage& st = qp.stages[k];
+      const Eigen::Vector2d rbar = gradient[k].tail<kQpControls>() + st.B.transpose() * p;
+      ws.feedforward_[k] = -ws.rbar_inverse_[k] * rbar;
+      p = gradient[k].head<kQpStates>() + st.A.transpose() * p +
+          ws.sbar_[k].transpose() * ws.feedforward_[k];
+    }
+    QpStateVector ds = QpStateVector::Zero();
+    for (int k = 0; k < n; ++k) {
+      const Eigen::Vector2d du = ws.gain_[k] * ds + ws.feedforward_[k];
+      out[k].head<kQpStates>() = ds;
+      out[k].tail<kQpControls>() = du;
+      ds = qp.stages[k].A * ds + qp.stages[k].B * du;
+    }
+    out[n].head<kQpStates>() = ds;
+    out[n].tail<kQpControls>().setZero();
+  }
+
+  // The response of the trajectory to a unit force on the terminal equality,
+  // which the Schur complement of that one row needs (same factorization).
+  void terminal_response() {
+    for (int k = 0; k <= n; ++k) ws.grad_[k].setZero();
+    ws.grad_[n] = qp.terminal_g;
+    back_substitute(ws.grad_, ws.dw_unit_);
+  }
+
+  // The Newton step for the current gradient (newton_gradient), then the
+  // eliminated row variables.
+  void solve_step() {
+    back_substitute(ws.grad_, ws.dw_);
+    if (qp.has_terminal_equality) {
+      // dw = dw_free + step * dw_unit, with step chosen so the equality holds after a full step.
+      const double residual = qp.terminal_d - qp.terminal_g.dot(ws.w_[n]);
+      const double response = qp.terminal_g.dot(ws.dw_unit_[n]);
+      ws.terminal_step_ = (residual - qp.terminal_g.dot(ws.dw_[n])) / response;
+      for (int k = 0; k <= n; ++k) ws.dw_[k] += ws.terminal_step_ * ws.dw_unit_[k];
+    }
+    for_each_row([&](int k, const QpRow& row, int i) {
+      const double gd = row_dot(row, i, ws.dw_[k]);
+      const double r1 = primal_residual(row, k, i);
+      ws.dlambda_[i] = ws.weight_[i] * gd + ws.offset_[i];
+      if (row.soft) {
+        const double a = ws.lambda_[i] / ws.t_[i];
+        const double b = ws.lambda_soft_[i] / ws.sigma_[i];
+        ws.dsigma_[i] = (ws.soft_q_[i] + a * gd) / (a + b);
+        ws.dt_[i] = -r1 - gd + ws.dsigma_[i];
+        const double r3 = qp.softness_weight - ws.lambda_[i] - ws.lambda_soft_[i];
+        ws.dlambda_soft_[i] = r3 - ws.dlambda_[i];
+      } else {
+        ws.dt_[i] = -r1 - gd;
+      }
+    });
+  }
+
+  // Largest step in (0, 1] that keeps every positive variable positive.
+  [[nodiscard]] double max_step() {
+    double alpha = 1.0;
+    auto limit = [&alpha](double value, double change) {
+      if (change < 0.0) alpha = std::min(alpha, -value / change);
+    };
+    for_each_row([&](int, const QpRow& row, int i) {
+      limit(ws.t_[i], ws.dt_[i]);
+      limit(ws.lambda_[i], ws.dlambda_[i]);
+      if (row.soft) {
+        limit(ws.sigma_[i], ws.dsigma_[i]);
+        limit(ws.lambda_soft_[i], ws.dlambda_soft_[i]);
+      }
+    });
+    return alpha;
+  }
+
+  [[nodiscard]] double complementarity_after(double alpha) {
+    double sum = 0.0;
+    int count = 0;
+    for_each_row([&](int, const QpRow& row, int i) {
+      sum += (ws.lambda_[i] + alpha * ws.dlambda_[i]) * (ws.t_[i] + alpha * ws.dt_[i]);
+      ++count;
+      if (row.soft) {
+        sum += (ws.lambda_soft_[i] + alpha * ws.dlambda_soft_[i]) *
+               (ws.sigma_[i] + alpha * ws.dsigma_[i]);
+        ++count;
+      }
+    });
+    return count > 0 ? sum / count : 0.0;
+  }
+
+  void take_step(double alpha) {
+    for (int k = 0; k <= n; ++k) ws.w_[k] += alpha * ws.dw_[k];
+    ws.terminal_multiplier_ += alpha * ws.terminal_step_;
+    for_each_row([&](int, const QpRow& row, int i) {
+      ws.t_[i] += alpha * ws.dt_[i];
+      ws.lambda_[i] += alpha * ws.dlambda_[i];
+      if (row.soft) {
+        ws.sigma_[i] += alpha * ws.dsigma_[i];
+        ws.lambda_soft_[i] += alpha * ws.dlambda_soft_[i];
+      }
+    });
+  }
+
+  [[nodiscard]] double worst_primal_residual() {
+    double worst =
+        qp.has_terminal_equality ? std::abs(qp.terminal_g.dot(ws.w_[n]) - qp.terminal_d) : 0.0;
+    for_each_row([&](int k, const QpRow& row, int i) {
+      worst = std::max(worst, std::abs(primal_residual(row, k, i)));
+      if (row.soft) {
+        worst = std::max(worst, std::abs(qp.softness_weight - ws.lambda_[i] - ws.lambda_soft_[i]) /
+                                    qp.softness_weight);
+      }
+    });
+    return worst;
+  }
+
+  [[nodiscard]] double objective() const {
+    double f = 0.0;
+    for (int k = 0; k <= n; ++k) {
+      f += 0.5 * ws.w_[k].dot(qp.stages[k].H * ws.w_[k]) + qp.stages[k].h.dot(ws.w_[k]);
+    }
+    return f;
+  }
+
+  [[nodiscard]] double max_softness() {
+    double worst = 0.0;
+    for_each_row([&](int, const QpRow& row, int i) {
+      if (row.soft) worst = std::max(worst, ws.sigma_[i]);
+    });
+    return worst;
+  }
+
+  QpResult run() {
+    QpResult result;
+    initialize();
+    for (int iteration = 0; iteration < settings.max_iterations; ++iteration) {
+      result.iterations = iteration;
+      const double mu = mean_complementarity();
+      const double primal = worst_primal_residual();
+      lagrangian_gradient();
+      // The dual residual costs a pass of its own: only look once the rest is small.
+      const double dual = (mu <= settings.tolerance && primal <= settings.primal_tolerance)
+                              ? dual_residual()
+                              : kInfinityResidual;
+      if (mu <= settings.tolerance && primal <= settings.primal_tolerance &&
+          dual <= settings.dual_tolerance) {
+        result.status = QpStatus::Optimal;
+        break;
+      }
+      row_weights();
+      if (!factorize()) return result;
+      if (qp.has_terminal_equality) terminal_response();
+      // Predictor: the affine-scaling direction.
+      newton_gradient([&](int i) { return -ws.lambda_[i] * ws.t_[i]; },
+                      [&](int i) { return -ws.lambda_soft_[i] * ws.sigma_[i]; });
+      solve_step();
+      const double alpha_affine = max_step();
+      const double mu_affine = complementarity_after(alpha_affine);
+      const double centering = std::pow(mu_affine / mu, 3);
+      ws.dt_aff_ = ws.dt_;
+      ws.dlambda_aff_ = ws.dlambda_;
+      ws.dsigma_aff_ = ws.dsigma_;
+      ws.dlambda_soft_aff_ = ws.dlambda_soft_;
+      // Corrector: aim at the centred point, with Mehrotra's second-order term.
+      const double target = centering * mu;
+      newton_gradient(
+          [&](int i) {
+            return target - ws.lambda_[i] * ws.t_[i] - ws.dlambda_aff_[i] * ws.dt_aff_[i];
+          },
+          [&](int i) {
+            return target - ws.lambda_soft_[i] * ws.sigma_[i] -
+                   ws.dlambda_soft_aff_[i] * ws.dsigma_aff_[i];
+          });
+      solve_step();
+      const double alpha = std::min(1.0, 0.995 * max_step());
+      take_step(alpha);
+      result.iterations = iteration + 1;
+      result.status = QpStatus::IterationLimit;
+    }
+    if (result.status == QpStatus::Optimal || result.status == QpStatus::IterationLimit) {
+      result.max_softness = max_softness();
+      result.objective = objective();
+      // A QP whose rows still need slack after the iteration limit is
+      // infeasible in all but name: the penalty keeps pushing sigma to zero.
+      const double limit = result.status == QpStatus::Optimal ? settings.softness_tolerance
+                                                              : settings.stalled_softness;
+      if (result.max_softness > limit) result.status = QpStatus::Infeasible;
+    }
+    for (int k = 0; k <= n; ++k) {
+      if (!ws.w_[k].allFinite()) result.status = QpStatus::NumericalError;
+    }
+    return result;
+  }
+};
+
+QpResult solve_structured_qp(const StructuredQp& qp, QpWorkspace& ws, const QpSettings& settings) {
+  return InteriorPointMethod{qp, ws, settings}.run();
+}
+
+}  // namespace lanechange::expert

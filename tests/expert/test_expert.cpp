@@ -1,0 +1,186 @@
+// The expert: formulation, structured QP, fast solver against the reference,
+// and whole plans checked by the independent audit.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "lanechange/audit.hpp"
+#include "lanechange/expert/crosscheck.hpp"
+#include "lanechange/expert/planner.hpp"
+#include "lanechange/sampler.hpp"
+
+namespace lanechange::expert {
+namespace {
+
+Scenario open_road_scenario(Behavior behavior = Behavior::ConstantSpeed) {
+  Scenario s = default_scenario(Config{});
+  s.behavior = behavior;
+  s.ego = {0.0, 0.0, 8.0, 0.0, 0.0};
+  s.leader = {40.0, 8.0, 0.0};
+  s.follower = {-60.0, 8.0, 0.0};
+  s.target = {70.0, 8.0, 0.0};
+  validate_scenario(s);
+  return s;
+}
+
+// The target lane packed bumper to bumper around the ego: no gap at all.
+Scenario no_gap_scenario() {
+  Scenario s = open_road_scenario();
+  s.follower = {-2.0, 8.0, 0.0};
+  s.target = {3.0, 8.0, 0.0};
+  validate_scenario(s);
+  return s;
+}
+
+TEST(Formulation, LinearizedStepIsExactAtItsOwnPoint) {
+  // A path of the nonlinear model, linearized about itself, satisfies the
+  // linearized dynamics exactly: the trapezoid of the linearization agrees
+  // with the trapezoid of the model at the linearization point.
+  const Scenario s = open_road_scenario();
+  Iterate path;
+  EgoState z = s.ego;
+  for (int k = 0; k <= s.steps; ++k) {
+    path.states.emplace_back(z.x, z.y, z.v, z.theta);
+    const Control u(0.3 * std::sin(0.1 * k), 0.05 * std::cos(0.2 * k));
+    if (k < s.steps) {
+      path.controls.push_back(u);
+      z = step_trapezoidal(z, {u[kA], u[kOmega]}, s.horizon / s.steps);
+    }
+  }
+  const auto prediction = predict_traffic(s, Config{}, s.steps, 0.1);
+  const LaneChangeQp qp = build_lane_change_qp(s, Config{}, path, prediction);
+  for (int k = 0; k < s.steps; ++k) {
+    const StageDynamics& d = qp.dynamics[k];
+    const State next = d.A * path.states[k] + d.B * path.controls[k] + d.c;
+    EXPECT_LT((next - path.states[k + 1]).cwiseAbs().maxCoeff(), 1e-12) << "step " << k;
+  }
+}
+
+TEST(Formulation, MiqpFormHasTheSameObjective) {
+  const Scenario s = ScenarioSampler(Config{}, 4).sample(0);
+  const LaneChangeQp qp = first_round_problem(s, Config{});
+  MiqpLayout layout;
+  const MiqpProblem miqp = to_miqp(qp, 1000.0, layout);
+  ASSERT_TRUE(miqp.check().empty()) << miqp.check();
+  Eigen::VectorXd x = Eigen::VectorXd::Zero(miqp.num_variables());
+  for (int i = 0; i < x.size(); ++i) x[i] = std::sin(1.0 + i);
+  const Iterate path = iterate_from_miqp(x, layout);
+  EXPECT_NEAR(miqp.objective(x), qp.objective(path), 1e-9 * std::abs(qp.objective(path)));
+  EXPECT_EQ(miqp.num_binaries(), 2 * s.steps);  // two modes a node, node 0 excluded
+}
+
+TEST(Formulation, WarmStartMeetsItsBoundaryConditions) {
+  const Scenario s = open_road_scenario();
+  const auto prediction = predict_traffic(s, Config{}, s.steps, 0.1);
+  const Iterate w = warm_start(s, Config{}, prediction);
+  ASSERT_EQ(static_cast<int>(w.states.size()), s.steps + 1);
+  EXPECT_NEAR(w.states.front()[kY], 0.0, 1e-12);
+  EXPECT_NEAR(w.states.back()[kY], s.lane_width, 1e-9);
+  EXPECT_NEAR(w.states.front()[kV], s.ego.v, 1e-9);
+  // Aimed behind the target by its safe distance, at the target's speed.
+  const SafeDistance& d = s.safe_distance.target;
+  EXPECT_NEAR(w.states.back()[kX],
+              prediction.car(Car::Target).x.back() - d.standstill - d.time_headway * s.target.v,
+              1e-6);
+}
+
+// The fast solver and Bonmin on the same first-round MIQPs, at N = 10 so that
+// the reference takes about a second. The full cross-check (200 scenarios,
+// N = 50) is `lanechange crosscheck`; docs/expert.md has its results.
+class CrossCheck : public ::testing::TestWithParam<std::tuple<LaneRule, int>> {};
+
+TEST_P(CrossCheck, FastSolverMatchesTheReference) {
+  const auto [rule, index] = GetParam();
+  Config config;
+  config.expert.steps = 10;
+  config.expert.lane_rule = rule;
+  const Scenario s = ScenarioSampler(config, 17).sample(static_cast<std::uint64_t>(index));
+  const LaneChangeQp qp = first_round_problem(s, config);
+  const CrossCheckCase c =
+      cross_check(qp, FastLaneChangeSolver{}, ReferenceLaneChangeSolver{}, {}, 1e-6);
+  EXPECT_TRUE(c.agree) << "fast " << to_string(c.fast_status) << " " << c.fast_objective
+                       << ", reference " << to_string(c.reference_status) << " "
+                       << c.reference_objective;
+}
+
+INSTANTIATE_TEST_SUITE_P(SampledScenarios, CrossCheck,
+                         ::testing::Combine(::testing::Values(LaneRule::EitherOr,
+                                                              LaneRule::Footprint),
+                                            ::testing::Range(0, 4)),
+                         [](const auto& info) {
+                           return std::string(std::get<0>(info.param) == LaneRule::EitherOr
+                                                  ? "either_or_"
+                                                  : "footprint_") +
+                                  std::to_string(std::get<1>(info.param));
+                         });
+
+TEST(FastSolver, ReportsAnInitialStateThatBreaksTheRules) {
+  Scenario s = open_road_scenario();
+  s.leader.x = 6.0;  // closer than the safe distance, though not touching
+  Config config;
+  config.expert.constrain_initial_node = true;
+  const LaneChangeQp qp = first_round_problem(s, config);
+  EXPECT_EQ(FastLaneChangeSolver{}.solve(qp, {}).status, MiqpStatus::Infeasible);
+}
+
+void expect_audit_passes(const Trajectory& t, const Scenario& s, const Config& c) {
+  for (const std::string& problem : audit_trajectory(t, s, c)) ADD_FAILURE() << problem;
+}
+
+TEST(Planner, WideOpenGapIsWellPosed) {
+  for (Behavior b : {Behavior::ConstantSpeed, Behavior::ConstantAccel, Behavior::Idm}) {
+    const Scenario s = open_road_scenario(b);
+    const ExpertPlanner planner(Config{}, std::make_shared<FastLaneChangeSolver>());
+    const ExpertResult r = planner.plan(s);
+    EXPECT_EQ(r.status, PlanStatus::Converged) << r.reason;
+    const Trajectory t = planner.to_trajectory(r, s);
+    EXPECT_EQ(t.label, Label::WellPosed) << to_string(b) << ": " << t.reason;
+    EXPECT_FALSE(t.collision);
+    expect_audit_passes(t, s, Config{});
+  }
+}
+
+TEST(Planner, NoGapIsAFailure) {
+  const Scenario s = no_gap_scenario();
+  const ExpertPlanner planner(Config{}, std::make_shared<FastLaneChangeSolver>());
+  const ExpertResult r = planner.plan(s);
+  EXPECT_EQ(r.status, PlanStatus::Infeasible);
+  const Trajectory t = planner.to_trajectory(r, s);
+  EXPECT_EQ(t.label, Label::Failure);
+  EXPECT_FALSE(t.reason.empty());
+}
+
+TEST(Planner, SampledPlansPassTheAudit) {
+  const Config config;
+  const ScenarioSampler sampler(config, 23);
+  const ExpertPlanner planner(config, std::make_shared<FastLaneChangeSolver>());
+  int solved = 0;
+  for (std::uint64_t i = 0; i < 12; ++i) {
+    const Scenario s = sampler.sample(i);
+    const Trajectory t = planner.to_trajectory(planner.plan(s), s);
+    solved += t.label != Label::Failure;
+    for (const std::string& problem : audit_trajectory(t, s, config)) {
+      ADD_FAILURE() << "scenario " << i << ": " << problem;
+    }
+  }
+  EXPECT_GT(solved, 0);
+}
+
+TEST(Audit, CatchesTamperedPlans) {
+  const Scenario s = open_road_scenario();
+  const ExpertPlanner planner(Config{}, std::make_shared<FastLaneChangeSolver>());
+  const Trajectory good = planner.to_trajectory(planner.plan(s), s);
+  ASSERT_TRUE(audit_trajectory(good, s, Config{}).empty());
+  Trajectory moved = good;
+  moved.ego[20].x += 0.5;
+  EXPECT_FALSE(audit_trajectory(moved, s, Config{}).empty());
+  Trajectory relabelled = good;
+  relabelled.label = Label::IllPosed;
+  EXPECT_FALSE(audit_trajectory(relabelled, s, Config{}).empty());
+  Trajectory crashed = good;
+  crashed.others.cars[static_cast<int>(Car::Target)].x.assign(good.nodes(), good.ego.back().x);
+  EXPECT_FALSE(audit_trajectory(crashed, s, Config{}).empty());
+}
+
+}  // namespace
+}  // namespace lanechange::expert
