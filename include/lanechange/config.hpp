@@ -81,6 +81,11 @@ struct ExpertSettings {
   double weight_jerk = 100.0;      ///< c2
   double weight_lateral = 1.0;     ///< c3
   double weight_terminal_x = 0.0;  ///< pull of x_N towards the aim point (authors: 0.005)
+  /// A tiny price on omega^2 (times dt). The paper puts none, so where the
+  /// yaw rate does not matter the optimum is not unique (it chatters between
+  /// bounds) and the QP is singular in it; this picks the calmest optimum
+  /// and changes objectives by about 1e-6.
+  double weight_yaw_rate = 1e-6;
   JerkWeighting jerk_weighting = JerkWeighting::Derivative;
   LaneRule lane_rule = LaneRule::EitherOr;
   int max_iterations = 10;              ///< linearization rounds

@@ -76,6 +76,7 @@ void visit_fields(V& v, S& s) requires std::same_as<std::remove_const_t<S>, Expe
   v("weight_jerk", s.weight_jerk);
   v("weight_lateral", s.weight_lateral);
   v("weight_terminal_x", s.weight_terminal_x);
+  v("weight_yaw_rate", s.weight_yaw_rate);
   v("jerk_weighting", s.jerk_weighting);
   v("lane_rule", s.lane_rule);
   v("max_iterations", s.max_iterations);

@@ -2,6 +2,7 @@
 
 #include <signal.h>
 
+#include <Eigen/SparseCholesky>
 #include <algorithm>
 #include <chrono>
 #include <climits>
@@ -91,8 +92,8 @@ std::optional<ColumnBounds> effective_column_bounds(const MiqpProblem& problem,
 
 // Bonmin frees an invalid pointer when it is handed a problem without variables.
 void solve_without_variables(const MiqpProblem& problem, MiqpResult& result) {
-  const bool feasible = (problem.row_lower.array() <= 0.0).all() &&
-                        (problem.row_upper.array() >= 0.0).all();
+  const bool feasible =
+      (problem.row_lower.array() <= 0.0).all() && (problem.row_upper.array() >= 0.0).all();
   result.status = feasible ? MiqpStatus::Optimal : MiqpStatus::Infeasible;
   result.objective = feasible ? problem.constant : kInfinity;
   result.best_bound = result.objective;
@@ -273,6 +274,12 @@ void set_limits(Ipopt::OptionsList& options, const MiqpSettings& settings) {
 // tripled the time of our tests without changing any answer.
 void drop_heuristics(Ipopt::OptionsList& options) {
   set_option(options, "bonmin.heuristic_feasibility_pump", "no");
+  // Bonmin 1.8's default branching (strong branching with pseudo-costs) trips
+  // an assertion in Osi (OsiSimpleInteger::createBranch: upper > lower) on
+  // some infeasible lane-change MIQPs, which aborts the process. The choice
+  // of branching variable does not change the answer of a branch and bound.
+  set_option(options, "bonmin.number_strong_branch", 0);
+  set_option(options, "bonmin.variable_selection", "most-fractional");
 }
 
 // Ipopt's defaults stop at a scaled error of 1e-8 and relax every bound by 1e-8
@@ -396,7 +403,63 @@ std::string describe_current_exception() {
   }
 }
 
+// Waits for the library lock, which is also held while exceptions are handled since they
+// own pieces of Bonmin's state. The wait counts against the time limit.
+void run_bonmin_when_free(const MiqpProblem& problem, ColumnBounds bounds,
+                          const MiqpSettings& settings, BonminAlgorithm algorithm,
+                          Clock::time_point start, MiqpResult& result) {
+  const auto lock = lock_coin_or_libraries();
+  MiqpSettings remaining = settings;
+  remaining.time_limit_s -= milliseconds_since(start) / 1e3;
+  if (remaining.time_limit_s <= 0.0) {
+    result.status = MiqpStatus::TimeLimit;
+    result.message = "the time limit passed while waiting for another thread's solve";
+    return;
+  }
+  try {
+    run_bonmin(problem, std::move(bounds), remaining, algorithm, result);
+  } catch (...) {
+    result.status = MiqpStatus::NumericalError;
+    result.message = describe_current_exception();
+  }
+}
+
+// Only the columns that stay variable: all of them, or the continuous ones.
+Eigen::SparseMatrix<double> hessian_block(const MiqpProblem& problem, bool binaries_fixed) {
+  std::vector<int> block_index(problem.kinds.size(), -1);
+  int size = 0;
+  for (std::size_t j = 0; j < problem.kinds.size(); ++j) {
+    if (!binaries_fixed || problem.kinds[j] == VariableKind::Continuous) block_index[j] = size++;
+  }
+  std::vector<Eigen::Triplet<double>> entries;
+  const SparseTriplets all = triplets_of(problem.hessian, false);
+  for (Index e = 0; e < all.size(); ++e) {
+    const int row = block_index[static_cast<std::size_t>(all.rows[e])];
+    const int col = block_index[static_cast<std::size_t>(all.cols[e])];
+    if (row >= 0 && col >= 0) entries.emplace_back(row, col, all.values[e]);
+  }
+  Eigen::SparseMatrix<double> block(size, size);
+  block.setFromTriplets(entries.begin(), entries.end());
+  return block;
+}
+
 }  // namespace
+
+std::string check_convexity(const MiqpProblem& problem, bool binaries_fixed) {
+  Eigen::SparseMatrix<double> block = hessian_block(problem, binaries_fixed);
+  if (block.nonZeros() == 0) return {};
+  const double largest = block.coeffs().cwiseAbs().maxCoeff();
+  // Round-off in a positive semidefinite H (say B'B) stays orders of magnitude below this.
+  const double shift = 1e-8 * std::max(1.0, largest);
+  Eigen::SparseMatrix<double> identity(block.rows(), block.cols());
+  identity.setIdentity();
+  block += shift * identity;
+  const Eigen::SimplicialLLT<Eigen::SparseMatrix<double>> cholesky(block);
+  if (cholesky.info() == Eigen::Success) return {};
+  return binaries_fixed ? "hessian is not positive semidefinite over the continuous variables"
+                        : "hessian is not positive semidefinite, so Bonmin's relaxations with "
+                          "binaries in [0, 1] are nonconvex";
+}
 
 std::unique_lock<std::mutex> lock_coin_or_libraries() {
   static std::mutex coin_or_mutex;
@@ -412,27 +475,20 @@ std::string_view BonminSolver::name() const {
 MiqpResult BonminSolver::solve(const MiqpProblem& problem, const MiqpSettings& settings) const {
   const Clock::time_point start = Clock::now();
   MiqpResult result;
-  if (std::string problem_error = problem.check(); !problem_error.empty()) {
+  std::string problem_error = problem.check();
+  if (problem_error.empty()) problem_error = check_convexity(problem, /*binaries_fixed=*/false);
+  if (!problem_error.empty()) {
     result.status = MiqpStatus::InvalidProblem;
     result.message = std::move(problem_error);
-    return result;
-  }
-  std::optional<ColumnBounds> bounds = effective_column_bounds(problem, settings.integer_tolerance);
-  if (!bounds || rows_cross(problem)) {
+  } else if (auto bounds = effective_column_bounds(problem, settings.integer_tolerance);
+             !bounds || rows_cross(problem)) {
     result.status = MiqpStatus::Infeasible;
     result.best_bound = kInfinity;
     result.message = "a lower bound exceeds its upper bound";
   } else if (problem.num_variables() == 0) {
     solve_without_variables(problem, result);
   } else {
-    // Also held while exceptions are handled: they own pieces of Bonmin's state.
-    const auto lock = lock_coin_or_libraries();
-    try {
-      run_bonmin(problem, std::move(*bounds), settings, algorithm_, result);
-    } catch (...) {
-      result.status = MiqpStatus::NumericalError;
-      result.message = describe_current_exception();
-    }
+    run_bonmin_when_free(problem, std::move(*bounds), settings, algorithm_, start, result);
   }
   result.solve_ms = milliseconds_since(start);
   return result;

@@ -387,6 +387,15 @@ MiqpStatus status_of(Ipopt::ApplicationReturnStatus status) {
   }
 }
 
+std::string describe_failure(Ipopt::ApplicationReturnStatus status) {
+  switch (status) {
+    case Ipopt::Diverging_Iterates: return "Ipopt's iterates diverged (is the QP unbounded?)";
+    case Ipopt::Maximum_Iterations_Exceeded: return "Ipopt reached its iteration limit";
+    case Ipopt::Restoration_Failed: return "Ipopt's restoration phase failed";
+    default: return "Ipopt returned status " + std::to_string(static_cast<int>(status));
+  }
+}
+
 QpOutcome solve_reduced(IpoptSession& ipopt, const MiqpProblem& problem, const ReducedQp& qp,
                         double seconds_left) {
   QpOutcome outcome;
@@ -403,7 +412,7 @@ QpOutcome solve_reduced(IpoptSession& ipopt, const MiqpProblem& problem, const R
     outcome.x = qp.expand(tnlp->solution());
     outcome.objective = problem.objective(outcome.x);
   } else if (outcome.status == MiqpStatus::NumericalError) {
-    outcome.message = "Ipopt returned status " + std::to_string(static_cast<int>(status));
+    outcome.message = describe_failure(status);
   }
   return outcome;
 }
@@ -417,7 +426,13 @@ QpOutcome solve_fixed(IpoptSession& ipopt, const MiqpProblem& problem,
     infeasible.status = MiqpStatus::Infeasible;
     return infeasible;
   }
-  return solve_reduced(ipopt, problem, *qp, seconds_left);
+  QpOutcome outcome = solve_reduced(ipopt, problem, *qp, seconds_left);
+  // Skipping such an assignment silently could hide the optimum, so it counts as a failure.
+  if (outcome.status == MiqpStatus::Infeasible) {
+    outcome.status = MiqpStatus::NumericalError;
+    outcome.message = "Ipopt reports infeasible a QP whose rows Clp can satisfy";
+  }
+  return outcome;
 }
 
 std::vector<Eigen::Index> binary_columns(const MiqpProblem& problem) {
@@ -482,7 +497,7 @@ class Enumeration {
       result.status = MiqpStatus::NumericalError;
       message << failures_ << " of " << result.nodes
               << " QPs failed, so the best point is not proven optimal; first: " << first_failure_;
-    } else if (best_.x.size() > 0) {
+    } else if (best_.status == MiqpStatus::Optimal) {
       result.status = MiqpStatus::Optimal;
       result.best_bound = best_.objective;
     } else {
@@ -534,6 +549,10 @@ MiqpResult EnumerationSolver::solve(const MiqpProblem& problem,
                                     const MiqpSettings& settings) const {
   const Clock::time_point start = Clock::now();
   if (auto refused = refuse_invalid(problem)) return *refused;
+  if (std::string nonconvex = check_convexity(problem, /*binaries_fixed=*/true);
+      !nonconvex.empty()) {
+    return invalid_problem(std::move(nonconvex));
+  }
   if (problem.num_binaries() > kMaxBinaries) {
     return invalid_problem(std::to_string(problem.num_binaries()) +
                            " binaries; enumeration takes at most " + std::to_string(kMaxBinaries));

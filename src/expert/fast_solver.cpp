@@ -27,6 +27,7 @@ struct FastWorkspace final : LaneChangeWorkspace {
   QpWorkspace qp_workspace;
   std::vector<std::vector<int>> stack;  // mode assignments waiting to be solved
   std::vector<Control> start_controls;
+  long iterations = 0;  // of the interior-point method, for the solution's statistics
 };
 
 void add_row(QpStage& stage, const Eigen::Vector4d& g_state, double d, bool soft) {
@@ -72,6 +73,7 @@ void build_base(const LaneChangeQp& qp, StructuredQp& out) {
       st.B(4, kA) = 1.0;  // the next stage remembers this acceleration for the jerk
       st.c.head<4>() = qp.dynamics[k].c;
       st.H(5, 5) += 2.0 * qp.accel_weight;
+      st.H(6, 6) += 2.0 * qp.yaw_rate_weight;
       if (k >= 1) {
         const double w = 2.0 * qp.jerk_weight;
         st.H(5, 5) += w;
@@ -207,6 +209,7 @@ Iterate path_of(const QpWorkspace& qp_ws, int steps) {
 struct NodeOutcome {
   bool feasible = false;
   bool numerical_failure = false;
+  int iterations = 0;
   double objective = kInfinity;
   Iterate path;
 };
@@ -230,6 +233,7 @@ NodeOutcome solve_node_with(const LaneChangeQp& qp, const std::vector<int>& mode
   ws.qp_workspace.set_initial_controls(ws.start_controls);
   const QpResult r = solve_structured_qp(ws.node, ws.qp_workspace, QpSettings{});
   NodeOutcome out;
+  out.iterations = r.iterations;
   if (r.status == QpStatus::NumericalError || r.status == QpStatus::IterationLimit) {
     out.numerical_failure = true;
     return out;
@@ -245,8 +249,11 @@ NodeOutcome solve_node_with(const LaneChangeQp& qp, const std::vector<int>& mode
 NodeOutcome solve_node(const LaneChangeQp& qp, const std::vector<int>& modes, FastWorkspace& ws) {
   NodeOutcome out = solve_node_with(qp, modes, false, ws);
   if (out.feasible && !within_x_theta_bounds(qp, out.path)) {
+    const int earlier = out.iterations;
     out = solve_node_with(qp, modes, true, ws);
+    out.iterations += earlier;
   }
+  ws.iterations += out.iterations;
   return out;
 }
 
@@ -331,6 +338,7 @@ LaneChangeSolution FastLaneChangeSolver::solve(const LaneChangeQp& qp, const Miq
     ws = static_cast<FastWorkspace*>(owned.get());
   }
   LaneChangeSolution out;
+  ws->iterations = 0;
   const int n = qp.steps;
   // The initial state is given: some mode of node 0 must already hold.
   if (!qp.node_modes[0].empty()) {
@@ -388,6 +396,7 @@ LaneChangeSolution FastLaneChangeSolver::solve(const LaneChangeQp& qp, const Miq
       improve_switches(qp, start, objective, *ws, out.nodes, accept);
     }
   }
+  out.incumbent_qps = out.nodes;
   ws->stack.clear();
   numerical_trouble = root.numerical_failure;
   bool root_pending = root.feasible;
@@ -436,6 +445,7 @@ LaneChangeSolution FastLaneChangeSolver::solve(const LaneChangeQp& qp, const Miq
     }
   }
   out.solve_ms = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+  out.qp_iterations = ws->iterations;
   if (out.has_solution()) {
     out.status = MiqpStatus::Optimal;
     out.modes = modes_of(qp, out.path);

@@ -124,6 +124,7 @@ LaneChangeQp build_lane_change_qp(const Scenario& s, const Config& config, const
   qp.lateral_weight[n] = 0.0;
   qp.lateral_reference = s.lane_width;
   qp.terminal_x_weight = e.weight_terminal_x;
+  qp.yaw_rate_weight = e.weight_yaw_rate * qp.dt;
   qp.terminal_x_reference = terminal_aim(s, config, prediction);
   // x has no bound of its own; these never bind and give the big-M rows a box.
   constexpr double kXSlack = 50.0;
@@ -151,8 +152,10 @@ LaneChangeQp build_lane_change_qp(const Scenario& s, const Config& config, const
 
 double LaneChangeQp::objective(const Iterate& path) const {
   double total = 0.0;
-  for (int k = 0; k < steps; ++k)
-    total += accel_weight * path.controls[k][kA] * path.controls[k][kA];
+  for (int k = 0; k < steps; ++k) {
+    const Control& u = path.controls[k];
+    total += accel_weight * u[kA] * u[kA] + yaw_rate_weight * u[kOmega] * u[kOmega];
+  }
   for (int k = 0; k + 1 < steps; ++k) {
     const double jerk = path.controls[k + 1][kA] - path.controls[k][kA];
     total += jerk_weight * jerk * jerk;
@@ -276,8 +279,10 @@ void add_lane_rows(const LaneChangeQp& qp, double big_m, const MiqpLayout& at, R
 void add_objective(const LaneChangeQp& qp, const MiqpLayout& at, MiqpProblem& p) {
   Triplets h;
   const int n = qp.steps;
-  for (int k = 0; k < n; ++k)
+  for (int k = 0; k < n; ++k) {
     h.emplace_back(at.control(k, kA), at.control(k, kA), 2.0 * qp.accel_weight);
+    h.emplace_back(at.control(k, kOmega), at.control(k, kOmega), 2.0 * qp.yaw_rate_weight);
+  }
   for (int k = 0; k + 1 < n; ++k) {
     const int a0 = at.control(k, kA);
     const int a1 = at.control(k + 1, kA);

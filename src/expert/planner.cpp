@@ -91,7 +91,8 @@ ExpertResult ExpertPlanner::plan(const Scenario& scenario, const PlanLimits& lim
     }
     const LaneChangeSolution solution =
         solver_->solve(qp, settings, {workspace.get(), &mode_hint, &point.controls});
-    RoundReport report{solution.status, solution.objective, kInfinity, solution.nodes,
+    RoundReport report{solution.status,  solution.objective,     kInfinity,
+                       solution.nodes,   solution.qp_iterations, solution.incumbent_qps,
                        solution.solve_ms};
     if (solution.status != MiqpStatus::Optimal || !solution.has_solution()) {
       result.rounds.push_back(report);
@@ -182,6 +183,8 @@ Trajectory ExpertPlanner::to_trajectory(const ExpertResult& result,
          {"max_change",
           std::isfinite(r.max_change) ? nlohmann::json(r.max_change) : nlohmann::json()},
          {"nodes", r.nodes},
+         {"qp_iterations", r.qp_iterations},
+         {"incumbent_qps", r.incumbent_qps},
          {"solve_ms", r.solve_ms}});
   }
   t.details = {{"objective", result.objective},      {"iterations", result.iterations()},

@@ -309,6 +309,34 @@ TEST(BonminSolver, RefusesNaNDataWithoutSolving) {
   }
 }
 
+TEST(BonminSolver, RefusesANonconvexObjective) {
+  // x * b is convex once b is fixed but not over b in [0, 1], which B-BB relaxes to.
+  ProblemBuilder builder(2);
+  builder.bounds(0, -1.0, 1.0).binary(1);
+  Eigen::Matrix2d hessian;
+  hessian << 2.0, 3.0, 3.0, 0.0;
+  builder.objective(hessian, Eigen::Vector2d(0.0, 1.0), 0.0);
+  const MiqpProblem problem = builder.build();
+  const MiqpResult bonmin = BonminSolver().solve(problem, quiet_settings());
+  EXPECT_EQ(bonmin.status, MiqpStatus::InvalidProblem);
+  EXPECT_NE(bonmin.message.find("positive semidefinite"), std::string::npos) << bonmin.message;
+  // b = 1: x^2 + 3x + 1 is smallest at x = -1, value -1; b = 0 gives 0.
+  expect_optimal_point(problem, EnumerationSolver().solve(problem, quiet_settings()), -1.0);
+
+  MiqpProblem saddle = problem;
+  saddle.hessian.coeffRef(0, 0) = -1.0;
+  EXPECT_EQ(EnumerationSolver().solve(saddle, quiet_settings()).status, MiqpStatus::InvalidProblem);
+}
+
+TEST(BonminSolver, SolvesAProblemWithoutVariables) {
+  ProblemBuilder builder(0);
+  builder.objective(Eigen::MatrixXd(0, 0), Eigen::VectorXd(0), 2.5);
+  builder.row(Eigen::VectorXd(0), -1.0, 1.0);
+  const MiqpResult result = BonminSolver().solve(builder.build(), quiet_settings());
+  EXPECT_EQ(result.status, MiqpStatus::Optimal);
+  EXPECT_EQ(result.objective, 2.5);
+}
+
 TEST(BonminSolver, SolvesAProblemWithoutBinaries) {
   // minimize (x - 1)^2 + (y - 2)^2  s.t.  x + y <= 2: optimum at (0.5, 1.5), value 0.5.
   ProblemBuilder builder(2);

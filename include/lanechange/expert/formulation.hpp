@@ -2,7 +2,7 @@
 // The expert's problem for one round of successive linearization, in
 // stage-wise form (states z_k = [x, y, v, theta], controls u_k = [a, omega]):
 //
-//   minimize   sum_k w_a a_k^2 + sum_k w_j (a_{k+1} - a_k)^2
+//   minimize   sum_k w_a a_k^2 + sum_k w_w omega_k^2 + sum_k w_j (a_{k+1} - a_k)^2
 //              + sum_k w_y,k (y_k - y_ref)^2 + w_x (x_N - x_ref)^2
 //   subject to z_0 = the ego's state,
 //              z_{k+1} = A_k z_k + B_k u_k + c_k   (trapezoid, linearized)
@@ -60,6 +60,7 @@ struct LaneChangeQp {
   State initial_state = State::Zero();
   std::vector<StageDynamics> dynamics;  ///< steps entries
   double accel_weight = 0.0;            ///< on each a_k^2
+  double yaw_rate_weight = 0.0;         ///< on each omega_k^2
   double jerk_weight = 0.0;             ///< on each (a_{k+1} - a_k)^2
   std::vector<double> lateral_weight;   ///< steps + 1 entries, on (y_k - y_ref)^2
   double lateral_reference = 0.0;

@@ -17,7 +17,9 @@ struct LaneChangeSolution {
   Iterate path;            ///< empty unless a point was found
   std::vector<int> modes;  ///< the lane mode chosen at each node (-1 where none applies)
   double objective = kInfinity;
-  long nodes = 0;
+  long nodes = 0;          ///< QPs (ours) or tree nodes (Bonmin) solved
+  long qp_iterations = 0;  ///< interior-point iterations over all QPs (ours)
+  long incumbent_qps = 0;  ///< QPs spent finding a first solution before the search (ours)
   double solve_ms = 0.0;
   std::string message;
   [[nodiscard]] bool has_solution() const { return !path.states.empty(); }

@@ -30,6 +30,8 @@ struct RoundReport {
   double objective = kInfinity;
   double max_change = kInfinity;  ///< of x and y against the previous round (m)
   long nodes = 0;
+  long qp_iterations = 0;
+  long incumbent_qps = 0;
   double solve_ms = 0.0;
 };
 

@@ -1,0 +1,186 @@
+// The expert's hot paths: one MIQP solve (fast and reference on the same
+// linearized problems) and one whole plan (all rounds). Every case runs over
+// the same sampled scenarios; after the runs the program prints the median
+// per solve and the ratio reference / fast measured in this run, with the
+// seed, host and build, and the heap use of a plan (this binary counts every
+// operator new).
+#include <benchmark/benchmark.h>
+#include <sys/resource.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <new>
+#include <string>
+#include <vector>
+
+#include "lanechange/expert/crosscheck.hpp"
+#include "lanechange/expert/planner.hpp"
+#include "lanechange/sampler.hpp"
+
+namespace {
+
+std::atomic<long> g_allocations{0};
+std::atomic<long> g_bytes{0};
+
+}  // namespace
+
+void* operator new(std::size_t size) {
+  g_allocations.fetch_add(1, std::memory_order_relaxed);
+  g_bytes.fetch_add(static_cast<long>(size), std::memory_order_relaxed);
+  if (void* p = std::malloc(size == 0 ? 1 : size)) return p;
+  throw std::bad_alloc();
+}
+void operator delete(void* p) noexcept { std::free(p); }
+void operator delete(void* p, std::size_t) noexcept { std::free(p); }
+
+namespace lc = lanechange;
+namespace ex = lanechange::expert;
+
+namespace {
+
+constexpr std::uint64_t kSeed = 2026;
+
+int env_int(const char* name, int fallback) {
+  const char* v = std::getenv(name);
+  return v != nullptr ? std::atoi(v) : fallback;
+}
+
+const std::vector<lc::Scenario>& scenarios() {
+  static const std::vector<lc::Scenario> all = [] {
+    const lc::ScenarioSampler sampler(lc::Config{}, kSeed);
+    std::vector<lc::Scenario> out;
+    const int count = env_int("LANECHANGE_BENCH_SCENARIOS", 100);
+    for (int i = 0; i < count; ++i) out.push_back(sampler.sample(static_cast<std::uint64_t>(i)));
+    return out;
+  }();
+  return all;
+}
+
+const std::vector<ex::LaneChangeQp>& first_round_problems() {
+  static const std::vector<ex::LaneChangeQp> all = [] {
+    std::vector<ex::LaneChangeQp> out;
+    for (const auto& s : scenarios()) out.push_back(ex::first_round_problem(s, lc::Config{}));
+    return out;
+  }();
+  return all;
+}
+
+struct Samples {
+  std::vector<double> fast_solve_ms, reference_solve_ms, plan_ms;
+  std::vector<long> plan_allocations, plan_bytes;
+};
+Samples g_samples;
+
+double ms_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+
+// One solve per scenario, cycling through them.
+void solve_all(benchmark::State& state, const ex::LaneChangeSolver& solver, int count,
+               std::vector<double>& samples) {
+  const auto& problems = first_round_problems();
+  std::size_t i = 0;
+  for (auto _ : state) {
+    const auto& qp = problems[i % static_cast<std::size_t>(count)];
+    const auto t0 = std::chrono::steady_clock::now();
+    auto solution = solver.solve(qp, {});
+    benchmark::DoNotOptimize(solution);
+    samples.push_back(ms_since(t0));
+    ++i;
+  }
+}
+
+void BM_FastSolve(benchmark::State& state) {
+  solve_all(state, ex::FastLaneChangeSolver{}, static_cast<int>(scenarios().size()),
+            g_samples.fast_solve_ms);
+}
+
+void BM_ReferenceSolve(benchmark::State& state) {
+  solve_all(state, ex::ReferenceLaneChangeSolver{},
+            env_int("LANECHANGE_BENCH_REFERENCE_SCENARIOS", 100), g_samples.reference_solve_ms);
+}
+
+void BM_FastPlan(benchmark::State& state) {
+  const ex::ExpertPlanner planner(lc::Config{}, std::make_shared<ex::FastLaneChangeSolver>());
+  std::size_t i = 0;
+  for (auto _ : state) {
+    const auto& s = scenarios()[i % scenarios().size()];
+    const long allocations = g_allocations.load();
+    const long bytes = g_bytes.load();
+    const auto t0 = std::chrono::steady_clock::now();
+    auto result = planner.plan(s);
+    benchmark::DoNotOptimize(result);
+    g_samples.plan_ms.push_back(ms_since(t0));
+    g_samples.plan_allocations.push_back(g_allocations.load() - allocations);
+    g_samples.plan_bytes.push_back(g_bytes.load() - bytes);
+    ++i;
+  }
+}
+
+template <class T>
+double median(std::vector<T> v) {
+  if (v.empty()) return 0.0;
+  std::sort(v.begin(), v.end());
+  const std::size_t n = v.size();
+  return n % 2 == 1 ? static_cast<double>(v[n / 2])
+                    : 0.5 * (static_cast<double>(v[n / 2 - 1]) + static_cast<double>(v[n / 2]));
+}
+
+std::string cpu_model() {
+  std::ifstream in("/proc/cpuinfo");
+  std::string line;
+  while (std::getline(in, line)) {
+    if (line.rfind("model name", 0) == 0) return line.substr(line.find(':') + 2);
+  }
+  return "unknown";
+}
+
+void print_summary() {
+  char host[256] = {0};
+  gethostname(host, sizeof host - 1);
+  struct rusage usage {};
+  getrusage(RUSAGE_SELF, &usage);
+  const double fast = median(g_samples.fast_solve_ms);
+  const double reference = median(g_samples.reference_solve_ms);
+  std::printf("\n== expert benchmark summary ==\n");
+  std::printf("seed %llu, scenarios %zu (N = %d), host %s, cpu %s, build %s\n",
+              static_cast<unsigned long long>(kSeed), scenarios().size(), lc::Config{}.expert.steps,
+              host, cpu_model().c_str(),
+#ifdef NDEBUG
+              "release"
+#else
+              "debug"
+#endif
+  );
+  std::printf(
+      "median first-round MIQP solve: fast %.3f ms (%zu solves), reference %.1f ms (%zu solves)\n",
+      fast, g_samples.fast_solve_ms.size(), reference, g_samples.reference_solve_ms.size());
+  if (fast > 0 && reference > 0)
+    std::printf("ratio reference / fast (medians, this run): %.0f\n", reference / fast);
+  std::printf("median full plan (all rounds, fast): %.3f ms over %zu plans\n",
+              median(g_samples.plan_ms), g_samples.plan_ms.size());
+  std::printf("heap per plan: median %.0f allocations, %.0f bytes; process peak RSS %ld KiB\n",
+              median(g_samples.plan_allocations), median(g_samples.plan_bytes), usage.ru_maxrss);
+}
+
+}  // namespace
+
+BENCHMARK(BM_FastSolve)->Unit(benchmark::kMillisecond)->Iterations(300);
+BENCHMARK(BM_ReferenceSolve)
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(env_int("LANECHANGE_BENCH_REFERENCE_SCENARIOS", 100));
+BENCHMARK(BM_FastPlan)->Unit(benchmark::kMillisecond)->Iterations(300);
+
+int main(int argc, char** argv) {
+  benchmark::Initialize(&argc, argv);
+  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  print_summary();
+  return 0;
+}
