@@ -2,6 +2,7 @@
 // option) exits with code 2 and a message that names the problem; any other
 // error exits with 1.
 #include <CLI/CLI.hpp>
+#include <array>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -13,6 +14,7 @@
 #include "lanechange/error.hpp"
 #include "lanechange/expert/crosscheck.hpp"
 #include "lanechange/expert/planner.hpp"
+#include "lanechange/plot.hpp"
 #include "lanechange/sampler.hpp"
 #include "lanechange/scenario.hpp"
 
@@ -173,6 +175,81 @@ void add_crosscheck(CLI::App& app, const GlobalOptions& global) {
   });
 }
 
+// Plans sampled scenarios once and labels each plan under several reversal
+// tolerances and both readings of "y never decreases" (docs/expert.md).
+void add_label_study(CLI::App& app, const GlobalOptions& global) {
+  auto* cmd =
+      app.add_subcommand("label-study", "Label shares of expert plans under several tolerances");
+  static long long count = 100;
+  static std::uint64_t seed = 1;
+  cmd->add_option("--count", count, "How many sampled scenarios")
+      ->check(CLI::Range(1LL, 1000000LL));
+  cmd->add_option("--seed", seed, "Sampler seed");
+  cmd->callback([&global] {
+    const lc::Config config = global.config();
+    const lc::ScenarioSampler sampler(config, seed);
+    const lc::expert::ExpertPlanner planner(config,
+                                            std::make_shared<lc::expert::FastLaneChangeSolver>());
+    const std::vector<double> tolerances = {0.02, 0.05, 0.10, 0.20, 0.30};
+    const std::vector<lc::ReversalReference> references = {lc::ReversalReference::TargetCenter,
+                                                           lc::ReversalReference::RunningMax};
+    std::vector<std::array<long long, 3>> counts(tolerances.size() * references.size());
+    for (long long i = 0; i < count; ++i) {
+      const lc::Scenario s = sampler.sample(static_cast<std::uint64_t>(i));
+      const lc::Trajectory t = planner.to_trajectory(planner.plan(s), s);
+      for (std::size_t r = 0; r < references.size(); ++r) {
+        for (std::size_t j = 0; j < tolerances.size(); ++j) {
+          lc::LabelTolerances tol = config.labels;
+          tol.reversal = tolerances[j];
+          tol.reference = references[r];
+          // A failure (no solution, lane not reached, collision) stays one;
+          // only the reversal test depends on the tolerance.
+          const lc::Label label =
+              t.label == lc::Label::Failure
+                  ? lc::Label::Failure
+                  : lc::label_trajectory(t.ys(), t.ego.back().theta, s.lane_width, tol).label;
+          ++counts[r * tolerances.size() + j][static_cast<int>(label)];
+        }
+      }
+    }
+    std::cout
+        << "| reading | tolerance | well-posed | ill-posed | failure |\n|---|---|---|---|---|\n";
+    for (std::size_t r = 0; r < references.size(); ++r) {
+      for (std::size_t j = 0; j < tolerances.size(); ++j) {
+        const auto& c = counts[r * tolerances.size() + j];
+        auto share = [&](int k) {
+          return 100.0 * static_cast<double>(c[k]) / static_cast<double>(count);
+        };
+        char line[200];
+        std::snprintf(
+            line, sizeof line, "| %s | %.2f m | %.1f%% | %.1f%% | %.1f%% |\n",
+            references[r] == lc::ReversalReference::TargetCenter ? "target_center" : "running_max",
+            tolerances[j], share(0), share(1), share(2));
+        std::cout << line;
+      }
+    }
+  });
+}
+
+void add_plot(CLI::App& app, const GlobalOptions& global) {
+  auto* cmd = app.add_subcommand("plot", "Draw a trajectory file as a PNG (needs gnuplot)");
+  static std::string trajectory_path;
+  static std::string out_path;
+  static int snapshots = 5;
+  cmd->add_option("--trajectory", trajectory_path, "Trajectory JSON file (plan or rollout)")
+      ->required();
+  cmd->add_option("--out", out_path, "PNG file to write")->required();
+  cmd->add_option("--snapshots", snapshots, "How many instants to draw the cars at")
+      ->check(CLI::Range(1, 50));
+  cmd->callback([&global] {
+    lc::PlotOptions options;
+    options.vehicle = global.config().vehicle;  // the trajectory file does not store it
+    options.snapshots = snapshots;
+    lc::plot_trajectory(lc::load_trajectory(trajectory_path), out_path, options);
+    std::cerr << "wrote " << out_path << "\n";
+  });
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -187,6 +264,8 @@ int main(int argc, char** argv) {
   add_config(app, global);
   add_plan(app, global);
   add_crosscheck(app, global);
+  add_label_study(app, global);
+  add_plot(app, global);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {

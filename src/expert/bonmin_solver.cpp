@@ -274,6 +274,9 @@ void set_limits(Ipopt::OptionsList& options, const MiqpSettings& settings) {
 // tripled the time of our tests without changing any answer.
 void drop_heuristics(Ipopt::OptionsList& options) {
   set_option(options, "bonmin.heuristic_feasibility_pump", "no");
+}
+
+void choose_branching(Ipopt::OptionsList& options) {
   // Bonmin 1.8's default branching (strong branching with pseudo-costs) trips
   // an assertion in Osi (OsiSimpleInteger::createBranch: upper > lower) on
   // some infeasible lane-change MIQPs, which aborts the process. The choice
@@ -301,6 +304,7 @@ void configure(Bonmin::BonminSetup& setup, const MiqpSettings& settings,
              algorithm == BonminAlgorithm::BranchAndBound ? "B-BB" : "B-OA");
   set_limits(options, settings);
   drop_heuristics(options);
+  choose_branching(options);
   set_nlp_accuracy(options, settings);
   if (!settings.verbose) silence(options);
 }

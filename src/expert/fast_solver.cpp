@@ -241,6 +241,8 @@ NodeOutcome solve_node_with(const LaneChangeQp& qp, const std::vector<int>& mode
   if (r.status != QpStatus::Optimal) return out;
   out.feasible = true;
   out.path = path_of(ws.qp_workspace, qp.steps);
+  // The next node is most often a child or sibling of this one: start there.
+  ws.start_controls = out.path.controls;
   out.objective = qp.objective(out.path);
   return out;
 }

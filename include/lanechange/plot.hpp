@@ -1,0 +1,36 @@
+#pragma once
+// A picture of a plan or rollout: the two-lane road, the ego's path, and all
+// four cars at a few evenly spaced instants, drawn by gnuplot (pngcairo).
+//
+// gnuplot (5.4 or later, with the pngcairo terminal: Debian's gnuplot-nox) is
+// found at run time: $LANECHANGE_GNUPLOT if set and not empty, else `gnuplot`
+// on PATH, else the one found when the project was configured.
+#include <string>
+
+#include "lanechange/config.hpp"
+#include "lanechange/trajectory.hpp"
+
+namespace lanechange {
+
+struct PlotOptions {
+  /// The trajectory file does not store the car size, so the caller supplies it.
+  VehicleSize vehicle;
+  int snapshots = 5;  ///< instants at which the cars are drawn, from the first to the last node
+  int width_px = 1400;
+  int height_px = 450;
+};
+
+/// Writes a PNG (atomically: a failure leaves no partial file). Throws
+/// InputError for a malformed trajectory or options, std::runtime_error if
+/// the file cannot be created or gnuplot is missing or fails (the message
+/// says which, with gnuplot's own error output).
+void plot_trajectory(const Trajectory& trajectory, const std::string& png_path,
+                     const PlotOptions& options = {});
+
+/// The gnuplot script that plot_trajectory runs (testable without gnuplot).
+/// Throws InputError as plot_trajectory does.
+[[nodiscard]] std::string trajectory_plot_script(const Trajectory& trajectory,
+                                                 const std::string& png_path,
+                                                 const PlotOptions& options = {});
+
+}  // namespace lanechange

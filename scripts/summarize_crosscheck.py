@@ -1,0 +1,42 @@
+#!/usr/bin/env python3
+"""Summarises a `lanechange crosscheck --out FILE` run as a Markdown section."""
+import json
+import statistics
+import sys
+from collections import Counter
+
+
+def quantiles(values, qs=(0.5, 0.9, 0.99, 1.0)):
+    values = sorted(values)
+    if not values:
+        return ["-"] * len(qs)
+    return [values[min(len(values) - 1, int(q * (len(values) - 1) + 0.5))] for q in qs]
+
+
+def main(path):
+    rows = [json.loads(line) for line in open(path) if line.strip()]
+    agree = sum(r["agree"] for r in rows)
+    verdicts = Counter((r["fast_status"], r["reference_status"]) for r in rows)
+    solved = [r for r in rows if r["fast_status"] == "Optimal" and r["reference_status"] == "Optimal"]
+    print(f"- cases: {len(rows)}; agree (same verdict, objectives within 1e-6 relative): **{agree}**")
+    for (fast, ref), n in sorted(verdicts.items()):
+        print(f"- fast {fast} / reference {ref}: {n}")
+    if solved:
+        q = quantiles([r["relative_difference"] for r in solved])
+        print("- relative objective difference on the solved cases, median / 90% / 99% / max: "
+              + " / ".join(f"{v:.1e}" for v in q))
+    fast = [r["fast_ms"] for r in rows]
+    ref = [r["reference_ms"] for r in rows]
+    print(f"- median solve time: fast {statistics.median(fast):.2f} ms, "
+          f"reference {statistics.median(ref):.0f} ms, ratio of medians "
+          f"{statistics.median(ref) / statistics.median(fast):.0f}")
+    print(f"- median QPs (fast) {statistics.median(r['fast_nodes'] for r in rows):.0f}, "
+          f"median Bonmin nodes {statistics.median(r['reference_nodes'] for r in rows):.0f}")
+    for r in rows:
+        if not r["agree"]:
+            print(f"- disagreement: index {r['index']} ({r['behavior']}): fast {r['fast_status']} "
+                  f"{r['fast_objective']}, reference {r['reference_status']} {r['reference_objective']}")
+
+
+if __name__ == "__main__":
+    main(sys.argv[1])
