@@ -32,10 +32,16 @@ def main(path):
           f"{statistics.median(ref) / statistics.median(fast):.0f}")
     print(f"- median QPs (fast) {statistics.median(r['fast_nodes'] for r in rows):.0f}, "
           f"median Bonmin nodes {statistics.median(r['reference_nodes'] for r in rows):.0f}")
+    undecided = ("TimeLimit", "NodeLimit")
     for r in rows:
-        if not r["agree"]:
-            print(f"- disagreement: index {r['index']} ({r['behavior']}): fast {r['fast_status']} "
-                  f"{r['fast_objective']}, reference {r['reference_status']} {r['reference_objective']}")
+        if r["agree"]:
+            continue
+        kind = ("undecided (a solver hit its limit)"
+                if r["fast_status"] in undecided or r["reference_status"] in undecided
+                else "DISAGREEMENT")
+        print(f"- {kind}: index {r['index']} ({r['behavior']}): fast {r['fast_status']} "
+              f"{r['fast_objective']}, reference {r['reference_status']} {r['reference_objective']} "
+              f"after {r['reference_ms'] / 1000:.0f} s")
 
 
 if __name__ == "__main__":
