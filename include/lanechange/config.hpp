@@ -71,7 +71,7 @@ enum class WarmStart {
 /// How the traffic models integrate a step. The authors' prediction uses Euler.
 enum class TrafficIntegration {
   Ballistic,  ///< x += v dt + a dt^2 / 2 (Treiber and Kesting's scheme)
-  Euler,      ///< x += v dt
+  Euler,      ///< v += a dt, then x += v dt (semi-implicit; the authors' prediction)
 };
 
 struct ExpertSettings {

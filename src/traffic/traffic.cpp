@@ -88,8 +88,8 @@ void TrafficModel::step(double dt, const EgoFootprint& ego) {
     if (behavior_ == Behavior::Idm) {
       // Ballistic update with a stop instead of reversing (Treiber and Kesting).
       if (integration_ == TrafficIntegration::Euler) {
-        c.x += c.v * dt;
         c.v = std::max(0.0, c.v + c.a * dt);
+        c.x += c.v * dt;
       } else if (c.v + c.a * dt < 0.0) {
         c.x += c.v * c.v / (2.0 * std::max(-c.a, 1e-9));
         c.v = 0.0;
