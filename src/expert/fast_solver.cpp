@@ -10,6 +10,8 @@
 #include <chrono>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
+#include <cstdlib>
 
 #include "lanechange/expert/lane_change_solver.hpp"
 #include "lanechange/expert/structured_qp.hpp"
@@ -28,6 +30,9 @@ struct FastWorkspace final : LaneChangeWorkspace {
   std::vector<std::vector<int>> stack;  // mode assignments waiting to be solved
   std::vector<Control> start_controls;
   long iterations = 0;  // of the interior-point method, for the solution's statistics
+  long cutoffs = 0;     // nodes discarded by a dual bound before their QP converged
+  // LaneChangeQp::objective minus the QP's stage costs: the constant terms.
+  double objective_offset = 0.0;
 };
 
 void add_row(QpStage& stage, const Eigen::Vector4d& g_state, double d, bool soft) {
@@ -50,8 +55,11 @@ void add_control_bound(QpStage& stage, int component, double lo, double hi) {
 }
 
 // The round's QP without lane rows, in the solver's stage form.
-void build_base(const LaneChangeQp& qp, StructuredQp& out) {
+void build_base(const LaneChangeQp& qp, StructuredQp& out, double& objective_offset) {
   const int n = qp.steps;
+  objective_offset = qp.terminal_x_weight * qp.terminal_x_reference * qp.terminal_x_reference;
+  for (double w : qp.lateral_weight)
+    objective_offset += w * qp.lateral_reference * qp.lateral_reference;
   out.stages.resize(n + 1);
   out.initial_state.head<4>() = qp.initial_state;
   out.initial_state[4] = 0.0;
@@ -67,6 +75,7 @@ void build_base(const LaneChangeQp& qp, StructuredQp& out) {
     st.c.setZero();
     st.H.setZero();
     st.h.setZero();
+    st.control_curvature.setZero();
     if (k < n) {
       st.A.topLeftCorner<4, 4>() = qp.dynamics[k].A;
       st.B.topRows<4>() = qp.dynamics[k].B;
@@ -74,6 +83,7 @@ void build_base(const LaneChangeQp& qp, StructuredQp& out) {
       st.c.head<4>() = qp.dynamics[k].c;
       st.H(5, 5) += 2.0 * qp.accel_weight;
       st.H(6, 6) += 2.0 * qp.yaw_rate_weight;
+      st.control_curvature << 2.0 * qp.accel_weight, 2.0 * qp.yaw_rate_weight;
       if (k >= 1) {
         const double w = 2.0 * qp.jerk_weight;
         st.H(5, 5) += w;
@@ -227,13 +237,24 @@ bool within_x_theta_bounds(const LaneChangeQp& qp, const Iterate& path) {
 }
 
 NodeOutcome solve_node_with(const LaneChangeQp& qp, const std::vector<int>& modes, bool all_bounds,
-                            FastWorkspace& ws) {
+                            double cutoff, FastWorkspace& ws) {
   build_node(qp, modes, all_bounds, ws);
   ws.qp_workspace.setup(ws.node);
   ws.qp_workspace.set_initial_controls(ws.start_controls);
-  const QpResult r = solve_structured_qp(ws.node, ws.qp_workspace, QpSettings{});
+  QpSettings settings;
+  // A hair above the cutoff: a node this close is decided by its converged objective.
+  settings.objective_cutoff = cutoff - ws.objective_offset + 1e-9 * (1.0 + std::abs(cutoff));
+  const QpResult r = solve_structured_qp(ws.node, ws.qp_workspace, settings);
   NodeOutcome out;
   out.iterations = r.iterations;
+  if (std::getenv("TRACE_CUT") && std::isfinite(cutoff))
+    std::fprintf(stderr, "status %d it %d obj %.5g lb %.5g cutoff %.5g\n", int(r.status),
+                 r.iterations, r.objective + ws.objective_offset,
+                 r.lower_bound + ws.objective_offset, cutoff);
+  if (r.status == QpStatus::Cutoff) {
+    ++ws.cutoffs;
+    return out;
+  }
   if (r.status == QpStatus::NumericalError || r.status == QpStatus::IterationLimit) {
     out.numerical_failure = true;
     return out;
@@ -248,11 +269,13 @@ NodeOutcome solve_node_with(const LaneChangeQp& qp, const std::vector<int>& mode
 }
 
 // The node's QP; without the x and theta bounds unless its solution breaks one.
-NodeOutcome solve_node(const LaneChangeQp& qp, const std::vector<int>& modes, FastWorkspace& ws) {
-  NodeOutcome out = solve_node_with(qp, modes, false, ws);
+// A node whose optimum is proven to be at least `cutoff` comes back infeasible.
+NodeOutcome solve_node(const LaneChangeQp& qp, const std::vector<int>& modes, FastWorkspace& ws,
+                       double cutoff = kInfinity) {
+  NodeOutcome out = solve_node_with(qp, modes, false, cutoff, ws);
   if (out.feasible && !within_x_theta_bounds(qp, out.path)) {
     const int earlier = out.iterations;
-    out = solve_node_with(qp, modes, true, ws);
+    out = solve_node_with(qp, modes, true, cutoff, ws);
     out.iterations += earlier;
   }
   ws.iterations += out.iterations;
@@ -286,6 +309,11 @@ std::vector<int> modes_of(const LaneChangeQp& qp, const Iterate& path) {
 }
 
 using Clock = std::chrono::steady_clock;
+
+// A node whose bound reaches this cannot improve the incumbent by more than the gap.
+double prune_above(double incumbent, const MiqpSettings& settings) {
+  return incumbent - std::max(settings.absolute_gap, settings.relative_gap * std::abs(incumbent));
+}
 
 // Moves each lane switch of a complete mode sequence one node earlier or
 // later while that lowers the objective: a cheap way to an incumbent close to
@@ -353,7 +381,7 @@ LaneChangeSolution FastLaneChangeSolver::solve(const LaneChangeQp& qp, const Miq
       return out;
     }
   }
-  build_base(qp, ws->base);
+  build_base(qp, ws->base, ws->objective_offset);
   ws->node = ws->base;
   ws->start_controls.assign(n, Control::Zero());
   if (hints.controls != nullptr && static_cast<int>(hints.controls->size()) == n) {
@@ -402,7 +430,6 @@ LaneChangeSolution FastLaneChangeSolver::solve(const LaneChangeQp& qp, const Miq
   ws->stack.clear();
   numerical_trouble = root.numerical_failure;
   bool root_pending = root.feasible;
-  const double gap_of = settings.absolute_gap;
   while (root_pending || !ws->stack.empty()) {
     const double elapsed = std::chrono::duration<double>(Clock::now() - start).count();
     if (elapsed > settings.time_limit_s || out.nodes >= settings.node_limit) {
@@ -420,13 +447,12 @@ LaneChangeSolution FastLaneChangeSolver::solve(const LaneChangeQp& qp, const Miq
     } else {
       modes = std::move(ws->stack.back());
       ws->stack.pop_back();
-      o = solve_node(qp, modes, *ws);
+      o = solve_node(qp, modes, *ws, prune_above(incumbent, settings));
       ++out.nodes;
     }
     numerical_trouble = numerical_trouble || o.numerical_failure;
     if (!o.feasible) continue;
-    const double cutoff = incumbent - std::max(gap_of, settings.relative_gap * std::abs(incumbent));
-    if (o.objective >= cutoff) continue;
+    if (o.objective >= prune_above(incumbent, settings)) continue;
     const int k = branching_node(qp, modes, o.path);
     if (k < 0) {
       accept(o);

@@ -1,8 +1,8 @@
 #include "lanechange/expert/structured_qp.hpp"
 
-#include <Eigen/Cholesky>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace lanechange::expert {
 
@@ -31,6 +31,7 @@ void QpWorkspace::setup(const StructuredQp& qp) {
       if (nonzeros == 1) single_index_[row_offset_[k] + j] = last;
     }
   }
+  mark_control_boxes(qp);
   for (auto* v : {&w_, &dw_, &grad_, &grad_base_, &dw_unit_})
     v->assign(stages, QpStageVector::Zero());
   hess_.assign(stages, QpStageMatrix::Zero());
@@ -42,16 +43,70 @@ void QpWorkspace::setup(const StructuredQp& qp) {
   if (initial_controls_.size() != static_cast<std::size_t>(stages)) {
     initial_controls_.assign(stages, Eigen::Vector2d::Zero());
   }
-  for (auto* v :
-       {&t_, &lambda_, &sigma_, &lambda_soft_, &dt_, &dlambda_, &dsigma_, &dlambda_soft_, &weight_,
-        &offset_, &soft_q_, &dt_aff_, &dlambda_aff_, &dsigma_aff_, &dlambda_soft_aff_}) {
+  for (auto* v : {&t_, &lambda_, &sigma_, &lambda_soft_, &dt_, &dlambda_, &dsigma_, &dlambda_soft_,
+                  &weight_, &offset_, &soft_q_, &dt_aff_, &dlambda_aff_, &dsigma_aff_,
+                  &dlambda_soft_aff_, &a_, &inverse_t_, &inverse_sigma_, &inverse_a_plus_b_}) {
     v->assign(rows, 0.0);
+  }
+}
+
+void QpWorkspace::mark_control_boxes(const StructuredQp& qp) {
+  const int stages = qp.steps() + 1;
+  constexpr double kNone = std::numeric_limits<double>::infinity();
+  control_box_.assign(row_offset_.back(), false);
+  control_lower_.assign(stages, Eigen::Vector2d::Constant(-kNone));
+  control_upper_.assign(stages, Eigen::Vector2d::Constant(kNone));
+  for (int k = 0; k < stages; ++k) {
+    for (std::size_t j = 0; j < qp.stages[k].rows.size(); ++j) {
+      const QpRow& row = qp.stages[k].rows[j];
+      const int i = row_offset_[k] + static_cast<int>(j);
+      const int index = single_index_[i];
+      if (row.soft || index < kQpStates) continue;
+      control_box_[i] = true;
+      const int c = index - kQpStates;
+      const double limit = row.d / row.g[index];
+      if (row.g[index] > 0.0) control_upper_[k][c] = std::min(control_upper_[k][c], limit);
+      if (row.g[index] < 0.0) control_lower_[k][c] = std::max(control_lower_[k][c], limit);
+    }
   }
 }
 
 void QpWorkspace::set_initial_controls(const std::vector<Eigen::Vector2d>& controls) {
   initial_controls_.assign(controls.begin(), controls.end());
   initial_controls_.resize(controls.size() + 1, Eigen::Vector2d::Zero());
+}
+
+// Cholesky factor L (lower) of M with each pivot raised by
+// floor * (1 + |M_ii|); false if a pivot is still not positive. Written out
+// for the fixed stage size: Eigen's LLT runs its blocked path, made for large
+// matrices, and took an eighth of the solve time on 7 x 7 ones.
+bool floored_cholesky(const QpStageMatrix& M, double floor, QpStageMatrix& L) {
+  for (int j = 0; j < kQpStage; ++j) {
+    double pivot = M(j, j) + floor * (1.0 + std::abs(M(j, j)));
+    for (int k = 0; k < j; ++k) pivot -= L(j, k) * L(j, k);
+    if (!(pivot > 0.0)) return false;
+    const double diagonal = std::sqrt(pivot);
+    const double inverse = 1.0 / diagonal;
+    L(j, j) = diagonal;
+    for (int i = j + 1; i < kQpStage; ++i) {
+      double entry = M(i, j);
+      for (int k = 0; k < j; ++k) entry -= L(i, k) * L(j, k);
+      L(i, j) = entry * inverse;
+    }
+    for (int i = 0; i < j; ++i) L(i, j) = 0.0;
+  }
+  return true;
+}
+
+// min of g d + 0.5 q d^2 over lo <= v + d <= hi (q >= 0): the most that one
+// control can still lower a convex function with that slope and curvature.
+double least_change(double g, double q, double v, double lo, double hi) {
+  if (g == 0.0) return 0.0;
+  const double room = g > 0.0 ? lo - v : hi - v;  // towards descent
+  if (!std::isfinite(room))
+    return q > 0.0 ? -0.5 * g * g / q : -std::numeric_limits<double>::infinity();
+  const double d = q > 0.0 ? (g > 0.0 ? std::max(-g / q, room) : std::min(-g / q, room)) : room;
+  return g * d + 0.5 * q * d * d;
 }
 
 // The steps of the method, over the workspace's vectors. Rows are
@@ -169,15 +224,59 @@ struct InteriorPointMethod {
     return worst;
   }
 
-  // Row weights of the eliminated Newton system (the same for predictor and corrector).
+  // A lower bound on the optimum from the current multipliers. Every row
+  // but the hard control bounds is dualized (soft rows with lambda capped at
+  // the softness price, so the slack drops out); what is left is a convex
+  // function L of the controls over their box, with curvature at least the
+  // stages' control_curvature D. So for any u in the box
+  //   L(u) >= L(v) + g'(u - v) + 0.5 (u - v)' D (u - v),   g = dL/du at v,
+  // and the right side splits into one-dimensional minimizations. g comes
+  // from one adjoint pass; near a solution it is the dual residual and the
+  // bound closes on the optimum, and a node far above the cutoff shows it
+  // long before the method converges.
+  [[nodiscard]] double dual_bound() {
+    auto& gradient = ws.grad_;  // scratch: the Newton steps overwrite it
+    double lagrangian = objective();
+    for (int k = 0; k <= n; ++k) gradient[k] = qp.stages[k].H * ws.w_[k] + qp.stages[k].h;
+    if (qp.has_terminal_equality) {
+      gradient[n] += qp.terminal_g * ws.terminal_multiplier_;
+      lagrangian += ws.terminal_multiplier_ * (qp.terminal_g.dot(ws.w_[n]) - qp.terminal_d);
+    }
+    for_each_row([&](int k, const QpRow& row, int i) {
+      if (ws.control_box_[i]) return;
+      const double lambda = row.soft ? std::min(ws.lambda_[i], qp.softness_weight) : ws.lambda_[i];
+      lagrangian += lambda * (row_dot(row, i, ws.w_[k]) - row.d);
+      add_row_times(row, i, lambda, gradient[k]);
+    });
+    QpStateVector adjoint = gradient[n].head<kQpStates>();
+    double bound = lagrangian;
+    for (int k = n - 1; k >= 0; --k) {
+      const QpStage& st = qp.stages[k];
+      const Eigen::Vector2d slope = gradient[k].tail<kQpControls>() + st.B.transpose() * adjoint;
+      for (int c = 0; c < kQpControls; ++c) {
+        bound += least_change(slope[c], st.control_curvature[c], ws.w_[k][kQpStates + c],
+                              ws.control_lower_[k][c], ws.control_upper_[k][c]);
+      }
+      adjoint = gradient[k].head<kQpStates>() + st.A.transpose() * adjoint;
+    }
+    return std::isnan(bound) ? -kInfinityResidual : bound;
+  }
+
+  // Row weights of the eliminated Newton system (the same for predictor and
+  // corrector), and the quotients that the two Newton steps share: divisions
+  // were a large part of the per-row work.
   void row_weights() {
     for (int k = 0; k <= n; ++k) ws.hess_[k] = qp.stages[k].H;
     for_each_row([&](int k, const QpRow& row, int i) {
-      const double a = ws.lambda_[i] / ws.t_[i];
+      ws.inverse_t_[i] = 1.0 / ws.t_[i];
+      const double a = ws.lambda_[i] * ws.inverse_t_[i];
+      ws.a_[i] = a;
       double weight = a;
       if (row.soft) {
-        const double b = ws.lambda_soft_[i] / ws.sigma_[i];
-        weight = a * b / (a + b);
+        ws.inverse_sigma_[i] = 1.0 / ws.sigma_[i];
+        const double b = ws.lambda_soft_[i] * ws.inverse_sigma_[i];
+        ws.inverse_a_plus_b_[i] = 1.0 / (a + b);
+        weight = a * b * ws.inverse_a_plus_b_[i];
       }
       ws.weight_[i] = weight;
       const int j = ws.single_index_[i];
@@ -196,15 +295,13 @@ struct InteriorPointMethod {
     for (int k = 0; k <= n; ++k) ws.grad_[k] = ws.grad_base_[k];
     for_each_row([&](int k, const QpRow& row, int i) {
       const double r1 = primal_residual(row, k, i);
-      const double a = ws.lambda_[i] / ws.t_[i];
-      const double c4 = c4_of(i);
-      double e = c4 / ws.t_[i] + a * r1;
+      const double a = ws.a_[i];
+      double e = c4_of(i) * ws.inverse_t_[i] + a * r1;
       if (row.soft) {
-        const double b = ws.lambda_soft_[i] / ws.sigma_[i];
         const double r3 = qp.softness_weight - ws.lambda_[i] - ws.lambda_soft_[i];
-        const double q = c4 / ws.t_[i] + a * r1 + c5_of(i) / ws.sigma_[i] - r3;
+        const double q = e + c5_of(i) * ws.inverse_sigma_[i] - r3;
         ws.soft_q_[i] = q;
-        e -= a * q / (a + b);
+        e -= a * q * ws.inverse_a_plus_b_[i];
       }
       ws.offset_[i] = e;
       add_row_times(row, i, e, ws.grad_[k]);
@@ -237,15 +334,12 @@ struct InteriorPointMethod {
       // singular; a floor on each pivot, relative to its own size so that
       // the tiny entries are not swamped by the huge barrier weights,
       // keeps Cholesky going without changing the step measurably.
-      Eigen::LLT<Eigen::Matrix<double, kQpStage, kQpStage>> llt;
-      for (double floor = 1e-12;; floor *= 100.0) {
-        if (floor > 1e-2) return false;
-        Eigen::Matrix<double, kQpStage, kQpStage> regularized = M;
-        for (int i = 0; i < kQpStage; ++i) regularized(i, i) += floor * (1.0 + std::abs(M(i, i)));
-        llt.compute(regularized);
-        if (llt.info() == Eigen::Success) break;
+      QpStageMatrix L;
+      bool factored = false;
+      for (double floor = 1e-12; floor <= 1e-2 && !factored; floor *= 100.0) {
+        factored = floored_cholesky(M, floor, L);
       }
-      const auto L = llt.matrixL().toDenseMatrix();
+      if (!factored) return false;
       const Eigen::Matrix2d L11 = L.topLeftCorner<kQpControls, kQpControls>();
       Eigen::Matrix2d L11_inverse;
       L11_inverse << 1.0 / L11(0, 0), 0.0, -L11(1, 0) / (L11(0, 0) * L11(1, 1)), 1.0 / L11(1, 1);
@@ -305,9 +399,7 @@ struct InteriorPointMethod {
       const double r1 = primal_residual(row, k, i);
       ws.dlambda_[i] = ws.weight_[i] * gd + ws.offset_[i];
       if (row.soft) {
-        const double a = ws.lambda_[i] / ws.t_[i];
-        const double b = ws.lambda_soft_[i] / ws.sigma_[i];
-        ws.dsigma_[i] = (ws.soft_q_[i] + a * gd) / (a + b);
+        ws.dsigma_[i] = (ws.soft_q_[i] + ws.a_[i] * gd) * ws.inverse_a_plus_b_[i];
         ws.dt_[i] = -r1 - gd + ws.dsigma_[i];
         const double r3 = qp.softness_weight - ws.lambda_[i] - ws.lambda_soft_[i];
         ws.dlambda_soft_[i] = r3 - ws.dlambda_[i];
@@ -408,6 +500,13 @@ struct InteriorPointMethod {
       // scaled by barrier weights of 1e12 and more, so the dual residual can
       // stall at 1e-2 while the primal point and its objective no longer move
       // (to 1e-12): that point is the solution.
+      if (settings.objective_cutoff < kInfinityResidual && iteration > 0) {
+        result.lower_bound = std::max(result.lower_bound, dual_bound());
+        if (result.lower_bound >= settings.objective_cutoff) {
+          result.status = QpStatus::Cutoff;
+          return result;
+        }
+      }
       const double f = objective();
       const bool settled = std::abs(f - previous_objective) <= 1e-12 * (1.0 + std::abs(f));
       previous_objective = f;

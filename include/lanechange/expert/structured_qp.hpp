@@ -18,6 +18,7 @@
 //
 // The workspace is sized by setup() and reused: solve() allocates nothing.
 #include <Eigen/Core>
+#include <limits>
 #include <vector>
 
 namespace lanechange::expert {
@@ -41,6 +42,10 @@ struct QpStage {
   Eigen::Matrix<double, kQpStates, kQpControls> B = Eigen::Matrix<double, 5, 2>::Zero();
   QpStateVector c = QpStateVector::Zero();
   QpStageMatrix H = QpStageMatrix::Zero();
+  /// Optional: a diagonal D with H - diag(0, D) positive semidefinite (the
+  /// part of the cost that is curvature in the controls alone). Zero is
+  /// always valid; more makes the dual bound behind objective_cutoff tighter.
+  Eigen::Vector2d control_curvature = Eigen::Vector2d::Zero();
   QpStageVector h = QpStageVector::Zero();
   std::vector<QpRow> rows;
 };
@@ -68,15 +73,27 @@ struct QpSettings {
   double dual_tolerance = 1e-3;
   double softness_tolerance = 1e-6;  ///< a larger sigma means the hard problem is infeasible
   double stalled_softness = 1e-2;    ///< the same, for a solve stopped by the iteration limit
+  /// Stop with status Cutoff as soon as a proven lower bound on the optimum
+  /// (of the stage costs, as QpResult::objective) reaches this value: a branch
+  /// and bound discards such a node anyway, and most of them are clear after
+  /// a few iterations.
+  double objective_cutoff = std::numeric_limits<double>::infinity();
 };
 
-enum class QpStatus { Optimal, Infeasible, IterationLimit, NumericalError };
+enum class QpStatus {
+  Optimal,
+  Infeasible,
+  Cutoff,  ///< the optimum is at least QpSettings::objective_cutoff (or there is none)
+  IterationLimit,
+  NumericalError
+};
 
 struct QpResult {
   QpStatus status = QpStatus::NumericalError;
   int iterations = 0;
   double max_softness = 0.0;  ///< largest sigma at the solution
   double objective = 0.0;     ///< of the stage costs, without the softness price
+  double lower_bound = -std::numeric_limits<double>::infinity();  ///< the last proven one
 };
 
 /// Per-stage vectors of the interior-point method; sized once for a problem shape.
@@ -90,8 +107,11 @@ class QpWorkspace {
 
  private:
   friend struct InteriorPointMethod;
+  void mark_control_boxes(const StructuredQp& qp);
   std::vector<int> row_offset_;
   std::vector<int> single_index_;  ///< per row: its only nonzero, or -1
+  std::vector<bool> control_box_;  ///< per row: a hard bound on one control
+  std::vector<Eigen::Vector2d> control_lower_, control_upper_;  ///< per stage, from those rows
   std::vector<QpStageVector> w_, dw_, grad_, grad_base_, dw_unit_;
   double terminal_multiplier_ = 0.0;
   double terminal_step_ = 0.0;
@@ -105,6 +125,7 @@ class QpWorkspace {
   std::vector<double> dt_, dlambda_, dsigma_, dlambda_soft_;
   std::vector<double> weight_, offset_, soft_q_;
   std::vector<double> dt_aff_, dlambda_aff_, dsigma_aff_, dlambda_soft_aff_;
+  std::vector<double> a_, inverse_t_, inverse_sigma_, inverse_a_plus_b_;  ///< per iteration
 };
 
 /// Solves from the workspace's initial controls (zero unless set).

@@ -1,0 +1,116 @@
+// The Riccati interior-point method on random stage-structured QPs, and the
+// dual bound behind its objective cutoff: the bound must never pass the
+// optimum, and it must end solves whose optimum is far above the cutoff.
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "lanechange/expert/structured_qp.hpp"
+
+namespace lc = lanechange::expert;
+
+namespace {
+
+constexpr int kSteps = 30;
+
+// A stable random system with box controls, soft state rows and a terminal
+// equality; its cost has curvature `curvature` in the controls alone.
+lc::StructuredQp random_qp(unsigned seed, const Eigen::Vector2d& curvature, bool feasible) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  auto random = [&](auto& matrix, double scale) {
+    for (int i = 0; i < matrix.rows(); ++i)
+      for (int j = 0; j < matrix.cols(); ++j) matrix(i, j) = scale * normal(rng);
+  };
+  lc::StructuredQp qp;
+  qp.stages.resize(kSteps + 1);
+  random(qp.initial_state, 1.0);
+  for (int k = 0; k <= kSteps; ++k) {
+    lc::QpStage& st = qp.stages[k];
+    st.A = 0.9 * Eigen::Matrix<double, 5, 5>::Identity();
+    Eigen::Matrix<double, 5, 5> drift;
+    random(drift, 0.05);
+    st.A += drift;
+    random(st.B, 0.3);
+    random(st.c, 0.05);
+    Eigen::Matrix<double, lc::kQpStage, lc::kQpStage> root;
+    random(root, 0.5);
+    root.rightCols<2>().setZero();  // keep the control-only curvature exactly `curvature`
+    st.H = root.transpose() * root;
+    st.H.topLeftCorner<5, 5>() += 0.1 * Eigen::Matrix<double, 5, 5>::Identity();
+    if (k < kSteps) {
+      st.H(5, 5) += curvature[0];
+      st.H(6, 6) += curvature[1];
+      st.control_curvature = curvature;
+      for (int c = 0; c < 2; ++c) {
+        lc::QpRow upper, lower;
+        upper.g[5 + c] = 1.0;
+        upper.d = 1.0;
+        lower.g[5 + c] = -1.0;
+        lower.d = 1.0;
+        st.rows.push_back(upper);
+        st.rows.push_back(lower);
+      }
+    }
+    random(st.h, 1.0);
+    lc::QpRow state_row;
+    random(state_row.g, 1.0);
+    state_row.g.tail<2>().setZero();
+    state_row.d = feasible ? 20.0 + std::abs(normal(rng)) : -200.0;
+    state_row.soft = true;
+    if (k > 0) st.rows.push_back(state_row);
+  }
+  qp.has_terminal_equality = true;
+  qp.terminal_g[1] = 1.0;
+  qp.terminal_d = 0.5;
+  return qp;
+}
+
+lc::QpResult solve(const lc::StructuredQp& qp, double cutoff) {
+  lc::QpWorkspace ws;
+  ws.setup(qp);
+  lc::QpSettings settings;
+  settings.objective_cutoff = cutoff;
+  return lc::solve_structured_qp(qp, ws, settings);
+}
+
+}  // namespace
+
+TEST(StructuredQp, CutoffAboveTheOptimumNeverStopsTheSolve) {
+  for (unsigned seed = 1; seed <= 20; ++seed) {
+    for (const Eigen::Vector2d& curvature :
+         {Eigen::Vector2d(0.0, 0.0), Eigen::Vector2d(0.5, 1e-6)}) {
+      const lc::StructuredQp qp = random_qp(seed, curvature, true);
+      const lc::QpResult exact = solve(qp, std::numeric_limits<double>::infinity());
+      ASSERT_EQ(exact.status, lc::QpStatus::Optimal) << "seed " << seed;
+      const lc::QpResult bounded =
+          solve(qp, exact.objective + 1e-7 * (1.0 + std::abs(exact.objective)));
+      EXPECT_EQ(bounded.status, lc::QpStatus::Optimal) << "seed " << seed;
+      EXPECT_NEAR(bounded.objective, exact.objective, 1e-8 * (1.0 + std::abs(exact.objective)));
+      EXPECT_LE(bounded.lower_bound, exact.objective + 1e-9 * (1.0 + std::abs(exact.objective)));
+    }
+  }
+}
+
+TEST(StructuredQp, CutoffFarBelowTheOptimumEndsTheSolveEarly) {
+  for (unsigned seed = 1; seed <= 20; ++seed) {
+    const lc::StructuredQp qp = random_qp(seed, {0.5, 1e-6}, true);
+    const lc::QpResult exact = solve(qp, std::numeric_limits<double>::infinity());
+    ASSERT_EQ(exact.status, lc::QpStatus::Optimal);
+    const double cutoff = exact.objective - 0.2 * std::abs(exact.objective) - 1.0;
+    const lc::QpResult bounded = solve(qp, cutoff);
+    EXPECT_EQ(bounded.status, lc::QpStatus::Cutoff) << "seed " << seed;
+    EXPECT_GE(bounded.lower_bound, cutoff);
+    EXPECT_LT(bounded.iterations, exact.iterations) << "seed " << seed;
+  }
+}
+
+TEST(StructuredQp, RowsThatCannotHoldAreInfeasibleOrCutOff) {
+  for (unsigned seed = 1; seed <= 10; ++seed) {
+    const lc::StructuredQp qp = random_qp(seed, {0.5, 1e-6}, false);
+    EXPECT_EQ(solve(qp, std::numeric_limits<double>::infinity()).status, lc::QpStatus::Infeasible);
+    const lc::QpResult bounded = solve(qp, 1e3);
+    EXPECT_TRUE(bounded.status == lc::QpStatus::Cutoff ||
+                bounded.status == lc::QpStatus::Infeasible);
+  }
+}
