@@ -2,6 +2,7 @@
 
 #include <cmath>
 
+#include "lanechange/error.hpp"
 #include "lanechange/expert/planner.hpp"
 
 namespace lanechange::expert {
@@ -21,18 +22,15 @@ LaneChangeQp first_round_problem(const Scenario& scenario, const Config& base) {
   return build_lane_change_qp(scenario, config, point, prediction);
 }
 
-CrossCheckCase cross_check(const LaneChangeQp& qp, const LaneChangeSolver& fast,
-                           const LaneChangeSolver& reference, const MiqpSettings& settings,
-                           double tolerance) {
+CrossCheckCase compare_with_reference(const LaneChangeSolution& f, const StoredReference& r,
+                                      double tolerance) {
   CrossCheckCase c;
-  const LaneChangeSolution f = fast.solve(qp, settings);
-  const LaneChangeSolution r = reference.solve(qp, settings);
   c.fast_status = f.status;
   c.reference_status = r.status;
   c.fast_objective = f.objective;
   c.reference_objective = r.objective;
   c.fast_ms = f.solve_ms;
-  c.reference_ms = r.solve_ms;
+  c.reference_ms = r.ms;
   c.fast_nodes = f.nodes;
   c.reference_nodes = r.nodes;
   const bool both_solved = f.status == MiqpStatus::Optimal && r.status == MiqpStatus::Optimal;
@@ -44,6 +42,23 @@ CrossCheckCase cross_check(const LaneChangeQp& qp, const LaneChangeSolver& fast,
   }
   c.agree = both_infeasible || (both_solved && c.relative_difference <= tolerance);
   return c;
+}
+
+MiqpStatus parse_miqp_status(std::string_view text) {
+  for (MiqpStatus s :
+       {MiqpStatus::Optimal, MiqpStatus::Infeasible, MiqpStatus::TimeLimit, MiqpStatus::NodeLimit,
+        MiqpStatus::NumericalError, MiqpStatus::InvalidProblem}) {
+    if (to_string(s) == text) return s;
+  }
+  throw InputError("reference_status", "unknown solver status \"" + std::string(text) + "\"");
+}
+
+CrossCheckCase cross_check(const LaneChangeQp& qp, const LaneChangeSolver& fast,
+                           const LaneChangeSolver& reference, const MiqpSettings& settings,
+                           double tolerance) {
+  const LaneChangeSolution f = fast.solve(qp, settings);
+  const LaneChangeSolution r = reference.solve(qp, settings);
+  return compare_with_reference(f, {r.status, r.objective, r.solve_ms, r.nodes}, tolerance);
 }
 
 }  // namespace lanechange::expert

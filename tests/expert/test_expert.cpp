@@ -3,7 +3,9 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <fstream>
 
+#include "../foundation/test_helpers.hpp"
 #include "lanechange/audit.hpp"
 #include "lanechange/expert/crosscheck.hpp"
 #include "lanechange/expert/planner.hpp"
@@ -103,6 +105,35 @@ TEST_P(CrossCheck, FastSolverMatchesTheReference) {
   EXPECT_TRUE(c.agree) << "fast " << to_string(c.fast_status) << " " << c.fast_objective
                        << ", reference " << to_string(c.reference_status) << " "
                        << c.reference_objective;
+}
+
+TEST(CrossCheckReplayCli, CatchesAWrongStoredOptimumAndRejectsBadLines) {
+  testing::TempDir dir;
+  const std::string first = dir.file("first.jsonl");
+  ASSERT_EQ(testing::run_cli("crosscheck --count 2 --seed 17 --steps 6 --out " + first).exit_code,
+            0);
+  EXPECT_EQ(testing::run_cli("crosscheck --replay " + first).exit_code, 0);
+  // Shift every stored optimum by 1%: the replay must now disagree.
+  std::ifstream in(first);
+  std::ofstream tampered(dir.file("tampered.jsonl"));
+  for (std::string line; std::getline(in, line);) {
+    auto row = nlohmann::json::parse(line);
+    if (row["reference_objective"].is_number()) {
+      row["reference_objective"] = row["reference_objective"].get<double>() * 1.01 + 0.01;
+    } else {
+      row["reference_status"] = "Optimal";
+      row["reference_objective"] = 1.0;
+    }
+    tampered << row.dump() << "\n";
+  }
+  tampered.close();
+  const auto r = testing::run_cli("crosscheck --replay " + dir.file("tampered.jsonl"));
+  EXPECT_NE(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("0 of 2 agree"), std::string::npos) << r.output;
+  testing::write_text(dir.file("bad.jsonl"), "{\"index\": 1}\n");
+  const auto bad = testing::run_cli("crosscheck --replay " + dir.file("bad.jsonl"));
+  EXPECT_EQ(bad.exit_code, 2) << bad.output;
+  EXPECT_NE(bad.output.find("reference_status"), std::string::npos) << bad.output;
 }
 
 INSTANTIATE_TEST_SUITE_P(SampledScenarios, CrossCheck,

@@ -30,6 +30,22 @@ struct CrossCheckCase {
 /// The first round's MIQP of a scenario (warm start, prediction along it).
 [[nodiscard]] LaneChangeQp first_round_problem(const Scenario& scenario, const Config& config);
 
+/// The verdict of a stored reference solve (a line of an earlier cross-check).
+struct StoredReference {
+  MiqpStatus status = MiqpStatus::NumericalError;
+  double objective = kInfinity;
+  double ms = 0.0;
+  long nodes = 0;
+};
+
+/// Compares a fast solve with a reference result, fresh or stored.
+[[nodiscard]] CrossCheckCase compare_with_reference(const LaneChangeSolution& fast,
+                                                    const StoredReference& reference,
+                                                    double tolerance);
+
+/// Parses a MiqpStatus as to_string writes it; throws InputError otherwise.
+[[nodiscard]] MiqpStatus parse_miqp_status(std::string_view text);
+
 /// Compares the two solvers on one problem. `tolerance` bounds the relative
 /// objective difference.
 [[nodiscard]] CrossCheckCase cross_check(const LaneChangeQp& qp, const LaneChangeSolver& fast,
