@@ -10,8 +10,6 @@
 #include <chrono>
 #include <cmath>
 #include <cstdint>
-#include <cstdio>
-#include <cstdlib>
 
 #include "lanechange/expert/lane_change_solver.hpp"
 #include "lanechange/expert/structured_qp.hpp"
@@ -247,10 +245,6 @@ NodeOutcome solve_node_with(const LaneChangeQp& qp, const std::vector<int>& mode
   const QpResult r = solve_structured_qp(ws.node, ws.qp_workspace, settings);
   NodeOutcome out;
   out.iterations = r.iterations;
-  if (std::getenv("TRACE_CUT") && std::isfinite(cutoff))
-    std::fprintf(stderr, "status %d it %d obj %.5g lb %.5g cutoff %.5g\n", int(r.status),
-                 r.iterations, r.objective + ws.objective_offset,
-                 r.lower_bound + ws.objective_offset, cutoff);
   if (r.status == QpStatus::Cutoff) {
     ++ws.cutoffs;
     return out;
