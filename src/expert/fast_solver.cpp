@@ -19,7 +19,8 @@ namespace lanechange::expert {
 namespace {
 
 constexpr int kFree = -1;
-constexpr double kModeTolerance = 1e-6;  // m: a lane row may be this far off and still hold
+constexpr double kModeTolerance = 1e-6;    // m: a lane row may be this far off and still hold
+constexpr double kCoarseViolation = 1e-3;  // m: clearly broken even at a rough point
 
 struct FastWorkspace final : LaneChangeWorkspace {
   StructuredQp base;  // dynamics, costs and bounds of the round
@@ -216,6 +217,7 @@ Iterate path_of(const QpWorkspace& qp_ws, int steps) {
 
 struct NodeOutcome {
   bool feasible = false;
+  bool coarse = false;  // a point good enough to branch on, not a solution
   bool numerical_failure = false;
   int iterations = 0;
   double objective = kInfinity;
@@ -235,13 +237,18 @@ bool within_x_theta_bounds(const LaneChangeQp& qp, const Iterate& path) {
 }
 
 NodeOutcome solve_node_with(const LaneChangeQp& qp, const std::vector<int>& modes, bool all_bounds,
-                            double cutoff, FastWorkspace& ws) {
+                            double cutoff, bool coarse, FastWorkspace& ws) {
   build_node(qp, modes, all_bounds, ws);
   ws.qp_workspace.setup(ws.node);
   ws.qp_workspace.set_initial_controls(ws.start_controls);
   QpSettings settings;
   // A hair above the cutoff: a node this close is decided by its converged objective.
   settings.objective_cutoff = cutoff - ws.objective_offset + 1e-9 * (1.0 + std::abs(cutoff));
+  if (coarse) {
+    // Clearly below the cutoff: this node will be branched on, and a rough
+    // point tells where as well as the optimum does.
+    settings.coarse_below = cutoff - ws.objective_offset - 1e-2 * (1.0 + std::abs(cutoff));
+  }
   const QpResult r = solve_structured_qp(ws.node, ws.qp_workspace, settings);
   NodeOutcome out;
   out.iterations = r.iterations;
@@ -253,8 +260,9 @@ NodeOutcome solve_node_with(const LaneChangeQp& qp, const std::vector<int>& mode
     out.numerical_failure = true;
     return out;
   }
-  if (r.status != QpStatus::Optimal) return out;
+  if (r.status != QpStatus::Optimal && r.status != QpStatus::Coarse) return out;
   out.feasible = true;
+  out.coarse = r.status == QpStatus::Coarse;
   out.path = path_of(ws.qp_workspace, qp.steps);
   // The next node is most often a child or sibling of this one: start there.
   ws.start_controls = out.path.controls;
@@ -264,12 +272,13 @@ NodeOutcome solve_node_with(const LaneChangeQp& qp, const std::vector<int>& mode
 
 // The node's QP; without the x and theta bounds unless its solution breaks one.
 // A node whose optimum is proven to be at least `cutoff` comes back infeasible.
+// With `coarse`, a node well below the cutoff may come back as a rough point.
 NodeOutcome solve_node(const LaneChangeQp& qp, const std::vector<int>& modes, FastWorkspace& ws,
-                       double cutoff = kInfinity) {
-  NodeOutcome out = solve_node_with(qp, modes, false, cutoff, ws);
+                       double cutoff = kInfinity, bool coarse = false) {
+  NodeOutcome out = solve_node_with(qp, modes, false, cutoff, coarse, ws);
   if (out.feasible && !within_x_theta_bounds(qp, out.path)) {
     const int earlier = out.iterations;
-    out = solve_node_with(qp, modes, true, cutoff, ws);
+    out = solve_node_with(qp, modes, true, cutoff, coarse, ws);
     out.iterations += earlier;
   }
   ws.iterations += out.iterations;
@@ -277,9 +286,10 @@ NodeOutcome solve_node(const LaneChangeQp& qp, const std::vector<int>& modes, Fa
 }
 
 // The free node whose relaxed state violates all its modes the most, or -1.
-int branching_node(const LaneChangeQp& qp, const std::vector<int>& modes, const Iterate& path) {
+int branching_node(const LaneChangeQp& qp, const std::vector<int>& modes, const Iterate& path,
+                   double threshold) {
   int chosen = -1;
-  double most = kModeTolerance;
+  double most = threshold;
   for (int k = 1; k <= qp.steps; ++k) {
     if (modes[k] != kFree || qp.node_modes[k].empty()) continue;
     double least = kInfinity;
@@ -322,9 +332,9 @@ void improve_switches(const LaneChangeQp& qp, std::vector<int> modes, double obj
       if (modes[j] == modes[j - 1]) continue;
       for (int move = 0; move < 2 && !improved; ++move) {
         trial = modes;
-        if (move == 0) trial[j] = modes[j - 1];  // switch one node later
-        if (move == 1) trial[j - 1] = modes[j];  // switch one node earlier
-        NodeOutcome o = solve_node(qp, trial, ws);
+        if (move == 0) trial[j] = modes[j - 1];                // switch one node later
+        if (move == 1) trial[j - 1] = modes[j];                // switch one node earlier
+        NodeOutcome o = solve_node(qp, trial, ws, objective);  // only a better one counts
         ++nodes;
         if (o.feasible && o.objective < objective - 1e-12) {
           objective = o.objective;
@@ -441,13 +451,19 @@ LaneChangeSolution FastLaneChangeSolver::solve(const LaneChangeQp& qp, const Miq
     } else {
       modes = std::move(ws->stack.back());
       ws->stack.pop_back();
-      o = solve_node(qp, modes, *ws, prune_above(incumbent, settings));
+      o = solve_node(qp, modes, *ws, prune_above(incumbent, settings), true);
       ++out.nodes;
     }
     numerical_trouble = numerical_trouble || o.numerical_failure;
     if (!o.feasible) continue;
     if (o.objective >= prune_above(incumbent, settings)) continue;
-    const int k = branching_node(qp, modes, o.path);
+    int k = branching_node(qp, modes, o.path, o.coarse ? kCoarseViolation : kModeTolerance);
+    if (k < 0 && o.coarse) {  // maybe a leaf: only a solution can tell
+      o = solve_node(qp, modes, *ws, prune_above(incumbent, settings));
+      numerical_trouble = numerical_trouble || o.numerical_failure;
+      if (!o.feasible || o.objective >= prune_above(incumbent, settings)) continue;
+      k = branching_node(qp, modes, o.path, kModeTolerance);
+    }
     if (k < 0) {
       accept(o);
       continue;

@@ -508,6 +508,12 @@ struct InteriorPointMethod {
         }
       }
       const double f = objective();
+      if (f < settings.coarse_below && mu <= settings.coarse_tolerance &&
+          primal <= settings.coarse_tolerance && max_softness() <= settings.coarse_tolerance) {
+        result.status = QpStatus::Coarse;
+        result.objective = f;
+        return result;
+      }
       const bool settled = std::abs(f - previous_objective) <= 1e-12 * (1.0 + std::abs(f));
       previous_objective = f;
       if (mu <= settings.tolerance && primal <= settings.primal_tolerance &&

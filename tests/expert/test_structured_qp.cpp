@@ -114,3 +114,22 @@ TEST(StructuredQp, RowsThatCannotHoldAreInfeasibleOrCutOff) {
                 bounded.status == lc::QpStatus::Infeasible);
   }
 }
+
+TEST(StructuredQp, CoarseStopComesEarlyAndCloseToTheOptimum) {
+  for (unsigned seed = 1; seed <= 20; ++seed) {
+    const lc::StructuredQp qp = random_qp(seed, {0.5, 1e-6}, true);
+    const lc::QpResult exact = solve(qp, std::numeric_limits<double>::infinity());
+    ASSERT_EQ(exact.status, lc::QpStatus::Optimal);
+    lc::QpWorkspace ws;
+    ws.setup(qp);
+    lc::QpSettings settings;
+    settings.coarse_below = exact.objective + 1.0 + std::abs(exact.objective);
+    const lc::QpResult coarse = lc::solve_structured_qp(qp, ws, settings);
+    EXPECT_EQ(coarse.status, lc::QpStatus::Coarse) << "seed " << seed;
+    EXPECT_LT(coarse.iterations, exact.iterations) << "seed " << seed;
+    EXPECT_NEAR(coarse.objective, exact.objective, 1e-2 * (1.0 + std::abs(exact.objective)));
+    // Below the optimum nothing qualifies: the solve runs to the end.
+    settings.coarse_below = exact.objective - 1.0 - std::abs(exact.objective);
+    EXPECT_EQ(lc::solve_structured_qp(qp, ws, settings).status, lc::QpStatus::Optimal);
+  }
+}

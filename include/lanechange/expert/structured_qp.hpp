@@ -78,12 +78,19 @@ struct QpSettings {
   /// and bound discards such a node anyway, and most of them are clear after
   /// a few iterations.
   double objective_cutoff = std::numeric_limits<double>::infinity();
+  /// Stop with status Coarse at the first iterate whose objective is below
+  /// this, with mu and the rows within coarse_tolerance and no row needing
+  /// slack: enough for a branch and bound to pick where to branch, not to
+  /// take the point as a solution.
+  double coarse_below = -std::numeric_limits<double>::infinity();
+  double coarse_tolerance = 1e-3;
 };
 
 enum class QpStatus {
   Optimal,
   Infeasible,
   Cutoff,  ///< the optimum is at least QpSettings::objective_cutoff (or there is none)
+  Coarse,  ///< stopped early at a point below QpSettings::coarse_below (see there)
   IterationLimit,
   NumericalError
 };
