@@ -28,8 +28,9 @@ struct FastWorkspace final : LaneChangeWorkspace {
   QpWorkspace qp_workspace;
   std::vector<std::vector<int>> stack;  // mode assignments waiting to be solved
   std::vector<Control> start_controls;
-  long iterations = 0;  // of the interior-point method, for the solution's statistics
-  long cutoffs = 0;     // nodes discarded by a dual bound before their QP converged
+  long iterations = 0;         // of the interior-point method, for the solution's statistics
+  long cutoffs = 0;            // nodes discarded by a dual bound before their QP converged
+  unsigned needed_bounds = 0;  // state components whose bounds this round's QPs carry
   // LaneChangeQp::objective minus the QP's stage costs: the constant terms.
   double objective_offset = 0.0;
 };
@@ -100,17 +101,11 @@ void build_base(const LaneChangeQp& qp, StructuredQp& out, double& objective_off
       st.H(kX, kX) += 2.0 * qp.terminal_x_weight;
       st.h[kX] -= 2.0 * qp.terminal_x_weight * qp.terminal_x_reference;
     }
-    // The bounds on x and theta never bind in practice (they are far from
+    // The state bounds rarely bind (x and theta never: they are far from
     // anything the controls can reach), so the search leaves them out: a
-    // relaxation, still a valid bound. A solution that breaks one is solved
-    // again with them (see solve_node).
-    if (k >= 1) {
-      for (int i : {kY, kV}) {
-        Eigen::Vector4d e = Eigen::Vector4d::Unit(i);
-        add_row(st, e, qp.state_upper[k][i], true);
-        add_row(st, -e, -qp.state_lower[k][i], true);
-      }
-    }
+    // relaxation, still a valid bound, with fewer rows in every pass of the
+    // interior-point method. A solution that breaks one is solved again with
+    // them (see solve_node).
   }
 }
 
@@ -180,14 +175,15 @@ bool ramp_row(const LaneChangeQp& qp, int k, HalfSpace& out) {
   return false;
 }
 
-// The base with the lane rows of `modes` added; free nodes get their ramp.
-void build_node(const LaneChangeQp& qp, const std::vector<int>& modes, bool all_bounds,
+// The base with the bounds of the state components in `bounds` (bit i for
+// component i) and the lane rows of `modes`; free nodes get their ramp.
+void build_node(const LaneChangeQp& qp, const std::vector<int>& modes, unsigned bounds,
                 FastWorkspace& ws) {
   for (int k = 0; k <= qp.steps; ++k) {
     QpStage& st = ws.node.stages[k];
     st.rows.assign(ws.base.stages[k].rows.begin(), ws.base.stages[k].rows.end());
-    if (all_bounds && k >= 1) {
-      for (int i : {kX, kTheta}) {
+    for (int i = 0; i < 4 && k >= 1; ++i) {
+      if ((bounds >> i) & 1U) {
         Eigen::Vector4d e = Eigen::Vector4d::Unit(i);
         add_row(st, e, qp.state_upper[k][i], true);
         add_row(st, -e, -qp.state_lower[k][i], true);
@@ -224,21 +220,23 @@ struct NodeOutcome {
   Iterate path;
 };
 
-bool within_x_theta_bounds(const LaneChangeQp& qp, const Iterate& path) {
+// The state components (bit i for component i) whose bounds the path breaks.
+unsigned broken_bounds(const LaneChangeQp& qp, const Iterate& path) {
+  unsigned broken = 0;
   for (int k = 1; k <= qp.steps; ++k) {
-    for (int i : {kX, kTheta}) {
+    for (int i = 0; i < 4; ++i) {
       const double z = path.states[k][i];
       if (z > qp.state_upper[k][i] + kModeTolerance || z < qp.state_lower[k][i] - kModeTolerance) {
-        return false;
+        broken |= 1U << i;
       }
     }
   }
-  return true;
+  return broken;
 }
 
-NodeOutcome solve_node_with(const LaneChangeQp& qp, const std::vector<int>& modes, bool all_bounds,
+NodeOutcome solve_node_with(const LaneChangeQp& qp, const std::vector<int>& modes, unsigned bounds,
                             double cutoff, bool coarse, FastWorkspace& ws) {
-  build_node(qp, modes, all_bounds, ws);
+  build_node(qp, modes, bounds, ws);
   ws.qp_workspace.setup(ws.node);
   ws.qp_workspace.set_initial_controls(ws.start_controls);
   QpSettings settings;
@@ -270,18 +268,24 @@ NodeOutcome solve_node_with(const LaneChangeQp& qp, const std::vector<int>& mode
   return out;
 }
 
-// The node's QP; without the x and theta bounds unless its solution breaks one.
+// The node's QP, with the bounds of only those state components that this
+// round's solutions have broken so far: solved again, with more, while its
+// solution breaks one.
 // A node whose optimum is proven to be at least `cutoff` comes back infeasible.
 // With `coarse`, a node well below the cutoff may come back as a rough point.
 NodeOutcome solve_node(const LaneChangeQp& qp, const std::vector<int>& modes, FastWorkspace& ws,
                        double cutoff = kInfinity, bool coarse = false) {
-  NodeOutcome out = solve_node_with(qp, modes, false, cutoff, coarse, ws);
-  if (out.feasible && !within_x_theta_bounds(qp, out.path)) {
-    const int earlier = out.iterations;
-    out = solve_node_with(qp, modes, true, cutoff, coarse, ws);
-    out.iterations += earlier;
+  int iterations = 0;
+  NodeOutcome out;
+  for (;;) {
+    out = solve_node_with(qp, modes, ws.needed_bounds, cutoff, coarse, ws);
+    iterations += out.iterations;
+    const unsigned broken = out.feasible ? broken_bounds(qp, out.path) & ~ws.needed_bounds : 0U;
+    if (broken == 0) break;
+    ws.needed_bounds |= broken;
   }
-  ws.iterations += out.iterations;
+  out.iterations = iterations;
+  ws.iterations += iterations;
   return out;
 }
 
@@ -386,6 +390,7 @@ LaneChangeSolution FastLaneChangeSolver::solve(const LaneChangeQp& qp, const Miq
     }
   }
   build_base(qp, ws->base, ws->objective_offset);
+  ws->needed_bounds = 0;
   ws->node = ws->base;
   ws->start_controls.assign(n, Control::Zero());
   if (hints.controls != nullptr && static_cast<int>(hints.controls->size()) == n) {
