@@ -179,38 +179,44 @@ struct InteriorPointMethod {
     return row.soft ? r - ws.sigma_[i] : r;
   }
 
-  [[nodiscard]] double mean_complementarity() const {
-    double sum = 0.0;
-    int count = 0;
-    for (int k = 0; k <= n; ++k) {
-      for (int j = 0; j < static_cast<int>(qp.stages[k].rows.size()); ++j) {
-        const int i = ws.row_offset_[k] + j;
-        sum += ws.lambda_[i] * ws.t_[i];
-        ++count;
-        if (qp.stages[k].rows[j].soft) {
-          sum += ws.lambda_soft_[i] * ws.sigma_[i];
-          ++count;
-        }
-      }
-    }
-    return count > 0 ? sum / count : 0.0;
-  }
+  struct Measures {
+    double mu = 0.0;      ///< mean complementarity product
+    double primal = 0.0;  ///< largest row and terminal residual
+  };
 
-  // Gradient of the Lagrangian without the dynamics: H w + h + sum g lambda.
-  // Once per iteration: the predictor and the corrector start from it.
-  void lagrangian_gradient() {
+  // One pass over the rows for the iteration's measures and the gradient of
+  // the Lagrangian without the dynamics, H w + h + sum g lambda (the predictor
+  // and the corrector start from it).
+  [[nodiscard]] Measures measure_and_gradient() {
     for (int k = 0; k <= n; ++k) {
       ws.grad_base_[k] = qp.stages[k].H * ws.w_[k] + qp.stages[k].h;
     }
     if (qp.has_terminal_equality) ws.grad_base_[n] += qp.terminal_g * ws.terminal_multiplier_;
+    Measures m;
+    m.primal =
+        qp.has_terminal_equality ? std::abs(qp.terminal_g.dot(ws.w_[n]) - qp.terminal_d) : 0.0;
+    double sum = 0.0;
+    int count = 0;
     for_each_row([&](int k, const QpRow& row, int i) {
       add_row_times(row, i, ws.lambda_[i], ws.grad_base_[k]);
+      sum += ws.lambda_[i] * ws.t_[i];
+      ++count;
+      m.primal = std::max(m.primal, std::abs(primal_residual(row, k, i)));
+      if (row.soft) {
+        sum += ws.lambda_soft_[i] * ws.sigma_[i];
+        ++count;
+        m.primal =
+            std::max(m.primal, std::abs(qp.softness_weight - ws.lambda_[i] - ws.lambda_soft_[i]) /
+                                   qp.softness_weight);
+      }
     });
+    m.mu = count > 0 ? sum / count : 0.0;
+    return m;
   }
 
   // The costates that make the state part of stationarity hold; what is
   // left over in the control part is the dual residual.
-  // Needs lagrangian_gradient() first.
+  // Needs measure_and_gradient() first.
   [[nodiscard]] double dual_residual() {
     auto& nu = ws.costate_;
     nu[n] = -ws.grad_base_[n].head<kQpStates>();
@@ -385,7 +391,9 @@ struct InteriorPointMethod {
 
   // The Newton step for the current gradient (newton_gradient), then the
   // eliminated row variables.
-  void solve_step() {
+  // Returns the largest step in (0, 1] that keeps every positive variable
+  // positive (in the same pass over the rows).
+  [[nodiscard]] double solve_step() {
     back_substitute(ws.grad_, ws.dw_);
     if (qp.has_terminal_equality) {
       // dw = dw_free + step * dw_unit, with step chosen so the equality holds after a full step.
@@ -394,6 +402,10 @@ struct InteriorPointMethod {
       ws.terminal_step_ = (residual - qp.terminal_g.dot(ws.dw_[n])) / response;
       for (int k = 0; k <= n; ++k) ws.dw_[k] += ws.terminal_step_ * ws.dw_unit_[k];
     }
+    double alpha = 1.0;
+    auto limit = [&alpha](double value, double change) {
+      if (change < 0.0) alpha = std::min(alpha, -value / change);
+    };
     for_each_row([&](int k, const QpRow& row, int i) {
       const double gd = row_dot(row, i, ws.dw_[k]);
       const double r1 = primal_residual(row, k, i);
@@ -403,25 +415,13 @@ struct InteriorPointMethod {
         ws.dt_[i] = -r1 - gd + ws.dsigma_[i];
         const double r3 = qp.softness_weight - ws.lambda_[i] - ws.lambda_soft_[i];
         ws.dlambda_soft_[i] = r3 - ws.dlambda_[i];
+        limit(ws.sigma_[i], ws.dsigma_[i]);
+        limit(ws.lambda_soft_[i], ws.dlambda_soft_[i]);
       } else {
         ws.dt_[i] = -r1 - gd;
       }
-    });
-  }
-
-  // Largest step in (0, 1] that keeps every positive variable positive.
-  [[nodiscard]] double max_step() {
-    double alpha = 1.0;
-    auto limit = [&alpha](double value, double change) {
-      if (change < 0.0) alpha = std::min(alpha, -value / change);
-    };
-    for_each_row([&](int, const QpRow& row, int i) {
       limit(ws.t_[i], ws.dt_[i]);
       limit(ws.lambda_[i], ws.dlambda_[i]);
-      if (row.soft) {
-        limit(ws.sigma_[i], ws.dsigma_[i]);
-        limit(ws.lambda_soft_[i], ws.dlambda_soft_[i]);
-      }
     });
     return alpha;
   }
@@ -454,19 +454,6 @@ struct InteriorPointMethod {
     });
   }
 
-  [[nodiscard]] double worst_primal_residual() {
-    double worst =
-        qp.has_terminal_equality ? std::abs(qp.terminal_g.dot(ws.w_[n]) - qp.terminal_d) : 0.0;
-    for_each_row([&](int k, const QpRow& row, int i) {
-      worst = std::max(worst, std::abs(primal_residual(row, k, i)));
-      if (row.soft) {
-        worst = std::max(worst, std::abs(qp.softness_weight - ws.lambda_[i] - ws.lambda_soft_[i]) /
-                                    qp.softness_weight);
-      }
-    });
-    return worst;
-  }
-
   [[nodiscard]] double objective() const {
     double f = 0.0;
     for (int k = 0; k <= n; ++k) {
@@ -489,9 +476,7 @@ struct InteriorPointMethod {
     double previous_objective = kInfinityResidual;
     for (int iteration = 0; iteration < settings.max_iterations; ++iteration) {
       result.iterations = iteration;
-      const double mu = mean_complementarity();
-      const double primal = worst_primal_residual();
-      lagrangian_gradient();
+      const auto [mu, primal] = measure_and_gradient();
       // The dual residual costs a pass of its own: only look once the rest is small.
       const double dual = (mu <= settings.tolerance && primal <= settings.primal_tolerance)
                               ? dual_residual()
@@ -527,8 +512,7 @@ struct InteriorPointMethod {
       // Predictor: the affine-scaling direction.
       newton_gradient([&](int i) { return -ws.lambda_[i] * ws.t_[i]; },
                       [&](int i) { return -ws.lambda_soft_[i] * ws.sigma_[i]; });
-      solve_step();
-      const double alpha_affine = max_step();
+      const double alpha_affine = solve_step();
       const double mu_affine = complementarity_after(alpha_affine);
       const double centering = std::pow(mu_affine / mu, 3);
       ws.dt_aff_ = ws.dt_;
@@ -545,8 +529,7 @@ struct InteriorPointMethod {
             return target - ws.lambda_soft_[i] * ws.sigma_[i] -
                    ws.dlambda_soft_aff_[i] * ws.dsigma_aff_[i];
           });
-      solve_step();
-      const double alpha = std::min(1.0, 0.995 * max_step());
+      const double alpha = std::min(1.0, 0.995 * solve_step());
       take_step(alpha);
       result.iterations = iteration + 1;
       result.status = QpStatus::IterationLimit;
