@@ -155,7 +155,8 @@ json write_value(const T& v) {
 json parse_json_text(const std::string& text, const std::string& what);
 /// Reads a whole file and parses it; a missing file is an InputError too.
 json read_json_file(const std::string& path);
-/// Writes text to path atomically (temporary file, then rename), so a crash
+/// Writes text to path atomically (temporary file in the same directory,
+/// fsync, rename, fsync of the directory), so a crash
 /// never leaves a half-written file where a good one stood.
 void write_file_atomically(const std::string& path, const std::string& text);
 

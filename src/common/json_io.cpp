@@ -1,5 +1,7 @@
+#include <fcntl.h>
 #include <unistd.h>
 
+#include <cerrno>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -90,18 +92,46 @@ json read_json_file(const std::string& path) {
   return parse_json_text(buffer.str(), path);
 }
 
+namespace {
+
+// Writes all of text to fd, then forces it to the disk: a rename is only as
+// durable as the data it publishes.
+bool write_and_sync(int fd, const std::string& text) {
+  std::size_t written = 0;
+  while (written < text.size()) {
+    const ssize_t n = ::write(fd, text.data() + written, text.size() - written);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) return false;
+    written += static_cast<std::size_t>(n);
+  }
+  return ::fsync(fd) == 0;
+}
+
+// Makes the rename itself durable. Best effort: some file systems refuse to
+// sync a directory, and the data are already safe by then.
+void sync_directory(const std::filesystem::path& dir) {
+  const int fd = ::open(dir.empty() ? "." : dir.c_str(), O_RDONLY | O_DIRECTORY);
+  if (fd < 0) return;
+  (void)::fsync(fd);
+  ::close(fd);
+}
+
+}  // namespace
+
 void write_file_atomically(const std::string& path, const std::string& text) {
   const std::filesystem::path target(path);
   std::filesystem::path temporary = target;
   temporary += ".tmp." + std::to_string(::getpid());
-  {
-    std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
-    if (!out) throw std::runtime_error("cannot write " + temporary.string());
-    out << text;
-    out.flush();
-    if (!out) throw std::runtime_error("failed writing " + temporary.string());
+  const int fd = ::open(temporary.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (fd < 0) throw std::runtime_error("cannot write " + temporary.string());
+  const bool ok = write_and_sync(fd, text);
+  const bool closed = ::close(fd) == 0;
+  if (!ok || !closed) {
+    std::filesystem::remove(temporary);
+    throw std::runtime_error("failed writing " + temporary.string());
   }
   std::filesystem::rename(temporary, target);
+  sync_directory(target.parent_path());
 }
 
 }  // namespace lanechange::detail
