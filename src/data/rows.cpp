@@ -54,12 +54,11 @@ std::string scene_text(const Scenario& s) {
   return out;
 }
 
-void append_samples(ShardText& shard, std::uint64_t index, const std::string& scene,
-                    const PlanOutcome& outcome) {
+void put_samples(std::string& out, std::uint64_t index, const std::string& scene,
+                 const PlanOutcome& outcome) {
   const Trajectory& t = outcome.trajectory;
   for (int k = 0; k < t.nodes(); ++k) {
     const EgoState& z = t.ego[k];
-    std::string& out = shard.samples;
     out += std::to_string(index);
     put(out, static_cast<std::uint64_t>(k));
     put(out, to_string(outcome.label));
@@ -67,7 +66,6 @@ void append_samples(ShardText& shard, std::uint64_t index, const std::string& sc
     out += scene;
     for (double v : {z.x, z.y, z.v, z.theta, t.controls[k].a, t.controls[k].omega}) put(out, v);
     out += '\n';
-    ++shard.sample_rows;
   }
 }
 
@@ -107,12 +105,8 @@ std::vector<std::string> action_inputs() {
 
 std::vector<std::string> action_targets() { return {"a", "omega"}; }
 
-ShardText empty_shard() {
-  ShardText shard;
-  shard.scenarios = join(scenario_columns());
-  shard.samples = join(sample_columns());
-  shard.timing = join(timing_columns());
-  return shard;
+ScenarioRows header_rows() {
+  return {join(scenario_columns()), join(sample_columns()), join(timing_columns())};
 }
 
 std::string csv_field(const std::string& text) {
@@ -127,10 +121,11 @@ std::string csv_field(const std::string& text) {
   return quoted + "\"";
 }
 
-void append_rows(ShardText& shard, std::uint64_t index, std::uint64_t sub_seed,
-                 const Scenario& scenario, const PlanOutcome& outcome) {
+ScenarioRows scenario_rows(std::uint64_t index, std::uint64_t sub_seed, const Scenario& scenario,
+                           const PlanOutcome& outcome) {
   const std::string scene = scene_text(scenario);
-  std::string& out = shard.scenarios;
+  ScenarioRows rows;
+  std::string& out = rows.scenarios;
   out += std::to_string(index);
   put(out, sub_seed);
   put(out, to_string(scenario.behavior));
@@ -143,11 +138,11 @@ void append_rows(ShardText& shard, std::uint64_t index, std::uint64_t sub_seed,
   put(out, static_cast<std::uint64_t>(outcome.trajectory.nodes()));
   put(out, csv_field(outcome.reason));
   out += '\n';
-  ++shard.scenario_rows;
-  append_samples(shard, index, scene, outcome);
-  shard.timing += std::to_string(index);
-  put(shard.timing, outcome.solve_ms);
-  shard.timing += '\n';
+  put_samples(rows.samples, index, scene, outcome);
+  rows.timing += std::to_string(index);
+  put(rows.timing, outcome.solve_ms);
+  rows.timing += '\n';
+  return rows;
 }
 
 }  // namespace lanechange::data::detail

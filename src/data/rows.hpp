@@ -23,13 +23,11 @@ struct PlanOutcome {
   Trajectory trajectory;  ///< no nodes when there is no solution
 };
 
-/// The three files of a shard, as text, and their row counts.
-struct ShardText {
+/// One scenario's lines in each of a shard's three files.
+struct ScenarioRows {
   std::string scenarios;
   std::string samples;
   std::string timing;
-  long long scenario_rows = 0;
-  long long sample_rows = 0;
 };
 
 [[nodiscard]] std::vector<std::string> scenario_columns();
@@ -40,10 +38,10 @@ struct ShardText {
 [[nodiscard]] std::vector<std::string> action_inputs();
 [[nodiscard]] std::vector<std::string> action_targets();
 
-/// A shard's text with only the header lines.
-[[nodiscard]] ShardText empty_shard();
-void append_rows(ShardText& shard, std::uint64_t index, std::uint64_t sub_seed,
-                 const Scenario& scenario, const PlanOutcome& outcome);
+/// The header line of each file.
+[[nodiscard]] ScenarioRows header_rows();
+[[nodiscard]] ScenarioRows scenario_rows(std::uint64_t index, std::uint64_t sub_seed,
+                                         const Scenario& scenario, const PlanOutcome& outcome);
 
 /// RFC 4180 quoting when the field needs it; line breaks become spaces.
 [[nodiscard]] std::string csv_field(const std::string& text);

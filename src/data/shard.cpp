@@ -4,7 +4,6 @@
 #include <filesystem>
 #include <fstream>
 
-#include "common/json_fields.hpp"
 #include "lanechange/data/dataset.hpp"
 
 namespace lanechange::data {
@@ -62,11 +61,23 @@ PlanOutcome plan_outcome(const expert::ExpertPlanner& planner, const Scenario& s
   return out;
 }
 
-void write_shard(const ShardText& text, long long shard, const std::string& dir) {
-  const std::filesystem::path d(dir);
-  lanechange::detail::write_file_atomically((d / timing_file(shard)).string(), text.timing);
-  lanechange::detail::write_file_atomically((d / samples_file(shard)).string(), text.samples);
-  lanechange::detail::write_file_atomically((d / scenarios_file(shard)).string(), text.scenarios);
+ShardFiles::ShardFiles(const std::string& dir, long long shard)
+    : scenarios_((std::filesystem::path(dir) / scenarios_file(shard)).string()),
+      samples_((std::filesystem::path(dir) / samples_file(shard)).string()),
+      timing_((std::filesystem::path(dir) / timing_file(shard)).string()) {
+  write(header_rows());
+}
+
+void ShardFiles::write(const ScenarioRows& rows) {
+  scenarios_.write(rows.scenarios);
+  samples_.write(rows.samples);
+  timing_.write(rows.timing);
+}
+
+void ShardFiles::commit() {
+  timing_.commit();
+  samples_.commit();
+  scenarios_.commit();
 }
 
 long long count_rows(const std::string& path) {

@@ -1,11 +1,14 @@
 #pragma once
 // One shard: a contiguous range of scenario indices, planned and written as
-// three files. The scenarios file is renamed into place last, so its presence
-// means the shard is finished.
+// three files. Rows are streamed to temporary files as they are made, so a
+// worker holds one scenario's rows at a time whatever the shard size. The
+// scenarios file is renamed into place last: its presence means the shard is
+// finished.
 #include <cstdint>
 #include <optional>
 #include <string>
 
+#include "common/json_fields.hpp"
 #include "data/rows.hpp"
 #include "lanechange/expert/planner.hpp"
 #include "lanechange/sampler.hpp"
@@ -34,33 +37,40 @@ struct ShardMaker {
   double time_limit_s = 60.0;
 };
 
+/// The three files of a shard being written.
+class ShardFiles {
+ public:
+  ShardFiles(const std::string& dir, long long shard);
+  void write(const ScenarioRows& rows);
+  /// Publishes the files, the scenarios file last.
+  void commit();
+
+ private:
+  lanechange::detail::AtomicFile scenarios_;
+  lanechange::detail::AtomicFile samples_;
+  lanechange::detail::AtomicFile timing_;
+};
+
 /// Plans the shard's scenarios (calling `planned` after each) and writes its
 /// files atomically into dir.
 template <class Tick>
 void make_shard(const ShardMaker& maker, const ShardRange& range, const std::string& dir,
-                Tick&& planned);
-
-/// Writes the three files, the scenarios file last.
-void write_shard(const ShardText& text, long long shard, const std::string& dir);
+                Tick&& planned) {
+  ShardFiles files(dir, range.shard);
+  for (long long i = range.first; i < range.first + range.count; ++i) {
+    const auto index = static_cast<std::uint64_t>(i);
+    const Scenario scenario = maker.sampler.sample(index, maker.behavior);
+    files.write(scenario_rows(index, scenario_seed(maker.seed, index), scenario,
+                              plan_outcome(maker.planner, scenario, maker.time_limit_s)));
+    planned();
+  }
+  files.commit();
+}
 
 /// Whether the shard's files are all there with the expected row count.
 [[nodiscard]] bool shard_finished(const ShardRange& range, const std::string& dir);
 
 /// Data lines (all but the header) of a file; -1 if it cannot be read.
 [[nodiscard]] long long count_rows(const std::string& path);
-
-template <class Tick>
-void make_shard(const ShardMaker& maker, const ShardRange& range, const std::string& dir,
-                Tick&& planned) {
-  ShardText text = empty_shard();
-  for (long long i = range.first; i < range.first + range.count; ++i) {
-    const auto index = static_cast<std::uint64_t>(i);
-    const Scenario scenario = maker.sampler.sample(index, maker.behavior);
-    append_rows(text, index, scenario_seed(maker.seed, index), scenario,
-                plan_outcome(maker.planner, scenario, maker.time_limit_s));
-    planned();
-  }
-  write_shard(text, range.shard, dir);
-}
 
 }  // namespace lanechange::data::detail
