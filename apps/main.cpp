@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 #include <optional>
 
+#include "data_commands.hpp"
 #include "lanechange/config.hpp"
 #include "lanechange/error.hpp"
 #include "lanechange/expert/crosscheck.hpp"
@@ -333,6 +334,8 @@ int main(int argc, char** argv) {
   add_crosscheck(app, global);
   add_label_study(app, global);
   add_plot(app, global);
+  lc::app::add_generate(app, [&global] { return global.config(); });
+  lc::app::add_dataset_info(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {

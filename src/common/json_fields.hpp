@@ -9,6 +9,7 @@
 #include <set>
 #include <span>
 #include <string>
+#include <string_view>
 #include <utility>
 
 #include "lanechange/config.hpp"
@@ -155,8 +156,26 @@ json write_value(const T& v) {
 json parse_json_text(const std::string& text, const std::string& what);
 /// Reads a whole file and parses it; a missing file is an InputError too.
 json read_json_file(const std::string& path);
-/// Writes text to path atomically (temporary file, then rename), so a crash
-/// never leaves a half-written file where a good one stood.
+/// A file written atomically, piece by piece: the text goes to a temporary
+/// file in the same directory (PATH.tmp.PID); commit() fsyncs it, renames it
+/// to PATH and fsyncs the directory. A crash never leaves a half-written file
+/// where a good one stood; destroyed uncommitted, it removes the temporary.
+class AtomicFile {
+ public:
+  explicit AtomicFile(const std::string& path);
+  ~AtomicFile();
+  AtomicFile(const AtomicFile&) = delete;
+  AtomicFile& operator=(const AtomicFile&) = delete;
+  void write(std::string_view text);
+  void commit();
+
+ private:
+  std::string path_;
+  std::string temporary_;
+  int fd_ = -1;
+};
+
+/// The whole text through an AtomicFile.
 void write_file_atomically(const std::string& path, const std::string& text);
 
 }  // namespace lanechange::detail

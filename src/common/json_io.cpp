@@ -1,5 +1,7 @@
+#include <fcntl.h>
 #include <unistd.h>
 
+#include <cerrno>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -39,7 +41,11 @@ class PathTracker : public nlohmann::json_sax<json> {
     std::string out;
     for (const Frame& f : frames_) {
       if (f.is_array) {
-        out += "[" + std::to_string(f.index) + "]";
+        // Appended piece by piece: GCC 12 sees a false overlap (-Wrestrict)
+        // in "[" + ... once this is inlined.
+        out += '[';
+        out += std::to_string(f.index);
+        out += ']';
       } else if (!f.key.empty()) {
         out += (out.empty() ? "" : ".") + f.key;
       }
@@ -90,18 +96,65 @@ json read_json_file(const std::string& path) {
   return parse_json_text(buffer.str(), path);
 }
 
-void write_file_atomically(const std::string& path, const std::string& text) {
-  const std::filesystem::path target(path);
-  std::filesystem::path temporary = target;
-  temporary += ".tmp." + std::to_string(::getpid());
-  {
-    std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
-    if (!out) throw std::runtime_error("cannot write " + temporary.string());
-    out << text;
-    out.flush();
-    if (!out) throw std::runtime_error("failed writing " + temporary.string());
+namespace {
+
+// Makes a rename durable. Best effort: some file systems refuse to sync a
+// directory, and the data are already safe by then.
+void sync_directory(const std::filesystem::path& dir) {
+  const int fd = ::open(dir.empty() ? "." : dir.c_str(), O_RDONLY | O_DIRECTORY);
+  if (fd < 0) return;
+  (void)::fsync(fd);
+  ::close(fd);
+}
+
+// Unique per process: threads write different targets, ranks are processes.
+std::string temporary_name(const std::string& path) {
+  std::string name = path;
+  name.append(".tmp.");
+  name.append(std::to_string(::getpid()));
+  return name;
+}
+
+}  // namespace
+
+AtomicFile::AtomicFile(const std::string& path) : path_(path), temporary_(temporary_name(path)) {
+  fd_ = ::open(temporary_.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (fd_ < 0) throw std::runtime_error("cannot write " + temporary_);
+}
+
+AtomicFile::~AtomicFile() {
+  if (fd_ < 0) return;
+  ::close(fd_);
+  ::unlink(temporary_.c_str());
+}
+
+void AtomicFile::write(std::string_view text) {
+  if (fd_ < 0) throw std::logic_error("write after commit: " + path_);
+  while (!text.empty()) {
+    const ssize_t n = ::write(fd_, text.data(), text.size());
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) throw std::runtime_error("failed writing " + temporary_);
+    text.remove_prefix(static_cast<std::size_t>(n));
   }
-  std::filesystem::rename(temporary, target);
+}
+
+void AtomicFile::commit() {
+  // The data must be on the disk before the rename publishes them.
+  const bool synced = ::fsync(fd_) == 0;
+  const bool closed = ::close(fd_) == 0;
+  fd_ = -1;
+  if (!synced || !closed) {
+    ::unlink(temporary_.c_str());
+    throw std::runtime_error("failed writing " + temporary_);
+  }
+  std::filesystem::rename(temporary_, path_);
+  sync_directory(std::filesystem::path(path_).parent_path());
+}
+
+void write_file_atomically(const std::string& path, const std::string& text) {
+  AtomicFile file(path);
+  file.write(text);
+  file.commit();
 }
 
 }  // namespace lanechange::detail

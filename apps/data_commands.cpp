@@ -1,0 +1,106 @@
+// `generate` and `dataset-info` (docs/dataset.md).
+#include "data_commands.hpp"
+
+#include <unistd.h>
+
+#include <iostream>
+
+#include "lanechange/data/dataset.hpp"
+#include "lanechange/error.hpp"
+#include "team.hpp"
+
+namespace lanechange::app {
+
+namespace {
+
+struct GenerateArgs {
+  long long count = 0;
+  std::uint64_t seed = 0;
+  std::string behavior = "all";
+  std::string out_dir;
+  int jobs = 0;
+  std::string solver = "fast";
+  std::string config_path;
+  int steps = 0;
+  long long shard_size = 200;
+  double time_limit = 60.0;
+};
+
+data::GenerateOptions to_options(const GenerateArgs& a, const ConfigSource& global_config) {
+  data::GenerateOptions o;
+  o.count = a.count;
+  o.seed = a.seed;
+  if (a.behavior != "all") o.behavior = behavior_from_string(a.behavior, "--behavior");
+  o.out_dir = a.out_dir;
+  o.solver = a.solver;
+  o.shard_size = a.shard_size;
+  o.time_limit_s = a.time_limit;
+  o.config = a.config_path.empty() ? global_config() : load_config(a.config_path);
+  if (a.steps > 0) o.config.expert.steps = a.steps;
+  return o;
+}
+
+void report_done(const data::GenerateReport& r, const data::Team& team, const std::string& dir) {
+  if (team.rank() != 0) return;
+  if (r.already_complete) {
+    std::cerr << dir << " is already complete; nothing to do\n";
+    return;
+  }
+  std::cerr << "wrote " << r.shards_written << " of " << r.shards_total << " shards ("
+            << r.scenarios_planned << " scenarios";
+  if (team.size() > 1) std::cerr << " on rank 0 of " << team.size();
+  std::cerr << ", " << r.shards_skipped << " finished before) to " << dir << " in " << r.wall_s
+            << " s\n";
+}
+
+void run_generate(const GenerateArgs& args, const ConfigSource& config) {
+  const data::GenerateOptions options = to_options(args, config);
+  const auto team = make_team();
+  data::RunOptions run;
+  run.jobs = args.jobs;
+  if (team->rank() == 0) {
+    run.progress = &std::cerr;
+    run.progress_on_terminal = ::isatty(STDERR_FILENO) != 0;
+  }
+  try {
+    report_done(data::generate(options, run, *team), *team, options.out_dir);
+  } catch (const InputError&) {
+    throw;  // every rank sees the same bad input and stops by itself
+  } catch (const std::exception& e) {
+    if (team->size() <= 1) throw;
+    std::cerr << "error on rank " << team->rank() << ": " << e.what() << "\n";
+    abort_team(*team, 1);
+  }
+}
+
+}  // namespace
+
+void add_generate(CLI::App& app, ConfigSource config) {
+  auto* cmd = app.add_subcommand(
+      "generate", "Plan N sampled scenarios with the expert and write a data set (resumable)");
+  static GenerateArgs args;
+  cmd->add_option("--count", args.count, "How many scenarios")->required();
+  cmd->add_option("--seed", args.seed, "Sampler seed")->required();
+  cmd->add_option("--out", args.out_dir, "Data set directory (created; resumed if it exists)")
+      ->required();
+  cmd->add_option("--behavior", args.behavior,
+                  "constant_speed, constant_accel, idm, or all (drawn per scenario)");
+  cmd->add_option("--jobs", args.jobs, "Worker threads per process (default: all cores)")
+      ->check(CLI::Range(0, 1024));
+  cmd->add_option("--solver", args.solver, "MIQP back-end: fast (ours) or reference (Bonmin)");
+  cmd->add_option("--config", args.config_path, "Config JSON file (overrides the global one)");
+  cmd->add_option("--steps", args.steps, "Override N, the plan's steps (cheaper data)")
+      ->check(CLI::Range(2, 10000));
+  cmd->add_option("--shard-size", args.shard_size, "Scenarios per shard file");
+  cmd->add_option("--time-limit", args.time_limit, "Seconds per plan");
+  cmd->callback([config] { run_generate(args, config); });
+}
+
+void add_dataset_info(CLI::App& app) {
+  auto* cmd = app.add_subcommand("dataset-info", "Counts and solve times of a data set");
+  static std::string dir;
+  cmd->add_option("dir", dir, "Data set directory")->required();
+  cmd->callback([] { data::print_summary(data::summarize_dataset(dir), std::cout); });
+}
+
+}  // namespace lanechange::app

@@ -1,0 +1,148 @@
+#include "data/rows.hpp"
+
+#include <array>
+#include <charconv>
+#include <cmath>
+
+namespace lanechange::data::detail {
+
+namespace {
+
+// The scene at t = 0, as the classifier and the action network see it.
+const std::vector<std::string>& scene_columns() {
+  static const std::vector<std::string> columns = {
+      "ego_x0",      "ego_y0",    "ego_v0",    "ego_theta0",  "ego_a0",
+      "leader_x0",   "leader_v0", "leader_a0", "follower_x0", "follower_v0",
+      "follower_a0", "target_x0", "target_v0", "target_a0"};
+  return columns;
+}
+
+std::array<double, 14> scene_values(const Scenario& s) {
+  return {s.ego.x,    s.ego.y,      s.ego.v,      s.ego.theta,  s.ego.a,    s.leader.x, s.leader.v,
+          s.leader.a, s.follower.x, s.follower.v, s.follower.a, s.target.x, s.target.v, s.target.a};
+}
+
+std::string join(const std::vector<std::string>& columns) {
+  std::string line;
+  for (const std::string& c : columns) line += (line.empty() ? "" : ",") + c;
+  return line + "\n";
+}
+
+// Shortest text that reads back as the same double; a missing value
+// (no solution) is an empty field, which pandas and MATLAB read as NaN.
+void put(std::string& out, double value) {
+  out += ',';
+  if (!std::isfinite(value)) return;
+  char buffer[32];
+  const auto end = std::to_chars(buffer, buffer + sizeof buffer, value).ptr;
+  out.append(buffer, end);
+}
+
+void put(std::string& out, std::uint64_t value) {
+  out += ',';
+  out += std::to_string(value);
+}
+
+void put(std::string& out, std::string_view text) {
+  out += ',';
+  out += text;
+}
+
+std::string scene_text(const Scenario& s) {
+  std::string out;
+  for (double v : scene_values(s)) put(out, v);
+  return out;
+}
+
+void put_samples(std::string& out, std::uint64_t index, const std::string& scene,
+                 const PlanOutcome& outcome) {
+  const Trajectory& t = outcome.trajectory;
+  for (int k = 0; k < t.nodes(); ++k) {
+    const EgoState& z = t.ego[k];
+    out += std::to_string(index);
+    put(out, static_cast<std::uint64_t>(k));
+    put(out, to_string(outcome.label));
+    put(out, t.t[k]);
+    out += scene;
+    for (double v : {z.x, z.y, z.v, z.theta, t.controls[k].a, t.controls[k].omega}) put(out, v);
+    out += '\n';
+  }
+}
+
+}  // namespace
+
+std::vector<std::string> scenario_columns() {
+  std::vector<std::string> c = {"index", "sub_seed", "behavior"};
+  c.insert(c.end(), scene_columns().begin(), scene_columns().end());
+  // The reason is last: it is the only field that may need quotes.
+  c.insert(c.end(),
+           {"label", "status", "collision", "objective", "iterations", "samples", "reason"});
+  return c;
+}
+
+std::vector<std::string> sample_columns() {
+  std::vector<std::string> c = {"index", "k", "label", "t"};
+  c.insert(c.end(), scene_columns().begin(), scene_columns().end());
+  c.insert(c.end(), {"x", "y", "v", "theta", "a", "omega"});
+  return c;
+}
+
+std::vector<std::string> timing_columns() { return {"index", "solve_ms"}; }
+
+std::vector<std::string> classifier_features() {
+  std::vector<std::string> c = {"ego_x0", "ego_v0"};
+  for (const char* car : {"leader", "follower", "target"}) {
+    for (const char* q : {"_x0", "_v0", "_a0"}) c.push_back(std::string(car) + q);
+  }
+  return c;
+}
+
+std::vector<std::string> action_inputs() {
+  std::vector<std::string> c = scene_columns();
+  c.insert(c.end(), {"x", "y", "v", "theta"});
+  return c;
+}
+
+std::vector<std::string> action_targets() { return {"a", "omega"}; }
+
+ScenarioRows header_rows() {
+  return {join(scenario_columns()), join(sample_columns()), join(timing_columns())};
+}
+
+std::string csv_field(const std::string& text) {
+  if (text.find_first_of(",\"\r\n") == std::string::npos) return text;
+  std::string quoted = "\"";
+  for (char c : text) {
+    // One record per line keeps the files countable with wc -l and readable
+    // by line-based tools; a line break in a message carries no meaning.
+    if (c == '\n' || c == '\r') c = ' ';
+    quoted += c == '"' ? std::string("\"\"") : std::string(1, c);
+  }
+  return quoted + "\"";
+}
+
+ScenarioRows scenario_rows(std::uint64_t index, std::uint64_t sub_seed, const Scenario& scenario,
+                           const PlanOutcome& outcome) {
+  const std::string scene = scene_text(scenario);
+  ScenarioRows rows;
+  std::string& out = rows.scenarios;
+  out += std::to_string(index);
+  put(out, sub_seed);
+  put(out, to_string(scenario.behavior));
+  out += scene;
+  put(out, to_string(outcome.label));
+  put(out, outcome.status);
+  put(out, static_cast<std::uint64_t>(outcome.collision ? 1 : 0));
+  put(out, outcome.objective);
+  put(out, static_cast<std::uint64_t>(outcome.iterations));
+  put(out, static_cast<std::uint64_t>(outcome.trajectory.nodes()));
+  put(out, csv_field(outcome.reason));
+  out += '\n';
+  put_samples(rows.samples, index, scene, outcome);
+  rows.timing += std::to_string(index);
+  put(rows.timing, outcome.solve_ms);
+  rows.timing += '\n';
+  return rows;
+}
+
+}  // namespace lanechange::data::detail

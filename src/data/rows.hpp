@@ -1,0 +1,49 @@
+#pragma once
+// The CSV rows of a shard (docs/dataset.md). Numbers are written in their
+// shortest exact form (std::to_chars), so a file is the same on every run and
+// a reader gets the very doubles we had.
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "lanechange/scenario.hpp"
+#include "lanechange/trajectory.hpp"
+
+namespace lanechange::data::detail {
+
+/// What planning one scenario gave: a plan, a failure, or an exception.
+struct PlanOutcome {
+  std::string status;  ///< PlanStatus name, or "exception"
+  std::string reason;  ///< empty for well-posed
+  Label label = Label::Failure;
+  bool collision = false;
+  double objective = 0.0;  ///< not finite when there is no solution
+  int iterations = 0;
+  double solve_ms = 0.0;
+  Trajectory trajectory;  ///< no nodes when there is no solution
+};
+
+/// One scenario's lines in each of a shard's three files.
+struct ScenarioRows {
+  std::string scenarios;
+  std::string samples;
+  std::string timing;
+};
+
+[[nodiscard]] std::vector<std::string> scenario_columns();
+[[nodiscard]] std::vector<std::string> sample_columns();
+[[nodiscard]] std::vector<std::string> timing_columns();
+/// Which sample columns feed which model (written into the manifest).
+[[nodiscard]] std::vector<std::string> classifier_features();
+[[nodiscard]] std::vector<std::string> action_inputs();
+[[nodiscard]] std::vector<std::string> action_targets();
+
+/// The header line of each file.
+[[nodiscard]] ScenarioRows header_rows();
+[[nodiscard]] ScenarioRows scenario_rows(std::uint64_t index, std::uint64_t sub_seed,
+                                         const Scenario& scenario, const PlanOutcome& outcome);
+
+/// RFC 4180 quoting when the field needs it; line breaks become spaces.
+[[nodiscard]] std::string csv_field(const std::string& text);
+
+}  // namespace lanechange::data::detail

@@ -1,0 +1,196 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <set>
+#include <sstream>
+
+#include "data_helpers.hpp"
+#include "lanechange/data/dataset.hpp"
+#include "lanechange/data/progress.hpp"
+#include "lanechange/error.hpp"
+#include "lanechange/expert/formulation.hpp"
+#include "lanechange/sampler.hpp"
+
+namespace lanechange {
+namespace {
+
+using testing::TempDir;
+
+data::GenerateOptions small_options(const std::filesystem::path& dir, long long count) {
+  data::GenerateOptions o;
+  o.count = count;
+  o.seed = 11;
+  o.out_dir = dir.string();
+  o.shard_size = 4;
+  o.config = make_preset("paper");
+  o.config.expert.steps = 8;
+  return o;
+}
+
+data::GenerateReport run(const data::GenerateOptions& o, int jobs,
+                         std::shared_ptr<const expert::LaneChangeSolver> solver = nullptr) {
+  data::RunOptions r;
+  r.jobs = jobs;
+  r.solver_override = std::move(solver);
+  data::Team alone;
+  return data::generate(o, r, alone);
+}
+
+TEST(Generate, OneAndTwoWorkersWriteTheSameFiles) {
+  TempDir dir;
+  const auto o1 = small_options(dir.path() / "one", 14);
+  auto o2 = o1;
+  o2.out_dir = (dir.path() / "two").string();
+  run(o1, 1);
+  run(o2, 2);
+  const auto one = testing::deterministic_files(o1.out_dir);
+  EXPECT_EQ(one.size(), 8U);  // 4 shards, two deterministic files each
+  EXPECT_EQ(one, testing::deterministic_files(o2.out_dir));
+  const auto m1 = testing::read_manifest(o1.out_dir);
+  const auto m2 = testing::read_manifest(o2.out_dir);
+  EXPECT_EQ(m1["status"], "complete");
+  EXPECT_EQ(m1["shards"], m2["shards"]);
+  EXPECT_EQ(m1["counts"], m2["counts"]);
+}
+
+TEST(Generate, EveryIndexOnceWithItsSubSeedAndBehavior) {
+  TempDir dir;
+  const auto o = small_options(dir.path(), 10);
+  run(o, 2);
+  const auto t = testing::read_all(dir.path(), "scenarios");
+  ASSERT_EQ(t.rows.size(), 10U);
+  const ScenarioSampler sampler(o.config, o.seed);
+  std::set<std::string> behaviors;
+  for (std::size_t i = 0; i < t.rows.size(); ++i) {
+    const auto& row = t.rows[i];
+    EXPECT_EQ(row[t.column("index")], std::to_string(i));
+    EXPECT_EQ(row[t.column("sub_seed")], std::to_string(scenario_seed(o.seed, i)));
+    // "all": each index keeps the behavior its own sub-seed draws.
+    EXPECT_EQ(row[t.column("behavior")], to_string(sampler.sample(i).behavior));
+    behaviors.insert(row[t.column("behavior")]);
+  }
+  EXPECT_GT(behaviors.size(), 1U);
+}
+
+TEST(Generate, FixedBehaviorAppliesToEveryScenario) {
+  TempDir dir;
+  auto o = small_options(dir.path(), 6);
+  o.behavior = Behavior::Idm;
+  run(o, 1);
+  const auto t = testing::read_all(dir.path(), "scenarios");
+  ASSERT_EQ(t.rows.size(), 6U);
+  for (const auto& row : t.rows) EXPECT_EQ(row[t.column("behavior")], "idm");
+}
+
+TEST(Generate, SolvedScenariosGiveNPlusOneSamplesFromTheirInitialScene) {
+  TempDir dir;
+  const auto o = small_options(dir.path(), 8);
+  run(o, 1);
+  const auto scenarios = testing::read_all(dir.path(), "scenarios");
+  const auto samples = testing::read_all(dir.path(), "samples");
+  std::map<std::string, std::vector<const std::vector<std::string>*>> by_index;
+  for (const auto& row : samples.rows) by_index[row[0]].push_back(&row);
+  long long solved = 0;
+  for (const auto& row : scenarios.rows) {
+    const auto& mine = by_index[row[scenarios.column("index")]];
+    EXPECT_EQ(std::to_string(mine.size()), row[scenarios.column("samples")]);
+    if (mine.empty()) continue;
+    ++solved;
+    ASSERT_EQ(mine.size(), 9U);  // N + 1 with N = 8
+    for (std::size_t k = 0; k < mine.size(); ++k) {
+      const auto& s = *mine[k];
+      EXPECT_EQ(s[samples.column("k")], std::to_string(k));
+      EXPECT_EQ(s[samples.column("label")], row[scenarios.column("label")]);
+      for (const char* c : {"ego_x0", "ego_v0", "leader_x0", "follower_v0", "target_a0"}) {
+        EXPECT_EQ(s[samples.column(c)], row[scenarios.column(c)]) << c;
+      }
+    }
+    // The current state at k = 0 is the initial one.
+    EXPECT_EQ(std::stod((*mine[0])[samples.column("v")]),
+              std::stod(row[scenarios.column("ego_v0")]));
+  }
+  EXPECT_GT(solved, 0);
+}
+
+// Throws for fast egos, so a run holds both kinds of rows.
+class ThrowingSolver final : public expert::LaneChangeSolver {
+ public:
+  [[nodiscard]] std::string_view name() const override { return "throwing"; }
+  [[nodiscard]] expert::LaneChangeSolution solve(const expert::LaneChangeQp& qp,
+                                                 const expert::MiqpSettings& settings,
+                                                 const expert::SolveHints& hints) const override {
+    if (qp.initial_state[expert::kV] > 8.0) throw std::runtime_error("boom, with a comma");
+    return fast_.solve(qp, settings, hints);
+  }
+
+ private:
+  expert::FastLaneChangeSolver fast_;
+};
+
+TEST(Generate, AThrowingSolverGivesFailureRowsAndTheRunGoesOn) {
+  TempDir dir;
+  const auto o = small_options(dir.path(), 12);
+  run(o, 2, std::make_shared<ThrowingSolver>());
+  const auto t = testing::read_all(dir.path(), "scenarios");
+  ASSERT_EQ(t.rows.size(), 12U);
+  int thrown = 0;
+  for (const auto& row : t.rows) {
+    const bool fast = std::stod(row[t.column("ego_v0")]) > 8.0;
+    EXPECT_EQ(row[t.column("status")] == "exception", fast);
+    if (!fast) continue;
+    ++thrown;
+    EXPECT_EQ(row[t.column("label")], "failure");
+    EXPECT_NE(row[t.column("reason")].find("boom, with a comma"), std::string::npos);
+  }
+  EXPECT_GT(thrown, 0);
+  EXPECT_LT(thrown, 12);
+  EXPECT_EQ(testing::read_manifest(dir.path())["counts"]["by_status"]["exception"], thrown);
+}
+
+TEST(Generate, MismatchedParametersAreRefusedAndNothingChanges) {
+  TempDir dir;
+  const auto o = small_options(dir.path(), 5);
+  run(o, 1);
+  const auto before = testing::all_files(dir.path());
+  auto other_seed = o;
+  other_seed.seed = 12;
+  auto other_count = o;
+  other_count.count = 6;
+  auto other_config = o;
+  other_config.config.expert.steps = 9;
+  for (const auto& bad : {other_seed, other_count, other_config}) {
+    EXPECT_THROW(run(bad, 1), InputError);
+  }
+  EXPECT_EQ(testing::all_files(dir.path()), before);
+  // The same parameters find a complete data set and leave it alone.
+  EXPECT_TRUE(run(o, 1).already_complete);
+  EXPECT_EQ(testing::all_files(dir.path()), before);
+}
+
+TEST(Progress, LogLineHasCountsRateAndEta) {
+  const std::string line = data::format_progress(50, 200, 10.0, false);
+  EXPECT_NE(line.find("50/200"), std::string::npos) << line;
+  EXPECT_NE(line.find("5.0/s"), std::string::npos) << line;
+  EXPECT_NE(line.find("ETA 0:00:30"), std::string::npos) << line;
+  EXPECT_EQ(line.find('['), std::string::npos) << line;
+}
+
+TEST(Progress, TerminalBarFillsWithTheFraction) {
+  const std::string line = data::format_progress(100, 200, 4.0, true);
+  EXPECT_EQ(std::count(line.begin(), line.end(), '#'), 15) << line;
+  EXPECT_NE(line.find("25.0/s"), std::string::npos) << line;
+}
+
+TEST(Progress, LogGetsPlainLinesAndAFinalOne) {
+  std::ostringstream out;
+  data::Progress p(&out, false, 3, 0.0);
+  for (int i = 0; i < 3; ++i) p.add(1);
+  p.finish();
+  const std::string text = out.str();
+  EXPECT_EQ(std::count(text.begin(), text.end(), '\n'), 4) << text;
+  EXPECT_EQ(text.find('\r'), std::string::npos);
+  EXPECT_NE(text.find("3/3 scenarios"), std::string::npos) << text;
+}
+
+}  // namespace
+}  // namespace lanechange
