@@ -101,7 +101,7 @@ json read_manifest(const std::string& dir) {
   if (!fs::exists(manifest_path(dir))) {
     throw InputError("", dir + " has no " + std::string(kManifestName) + ": not a data set");
   }
-  const json manifest = lanechange::detail::read_json_file(manifest_path(dir));
+  json manifest = lanechange::detail::read_json_file(manifest_path(dir));
   if (!manifest.is_object() || manifest.value("format", std::string()) != kDatasetFormat ||
       !manifest.contains("parameters") || !manifest["parameters"].is_object()) {
     throw InputError("",

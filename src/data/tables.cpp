@@ -5,10 +5,14 @@
 #include <limits>  // csv.h uses it without including it
 // csv.h copies file names with strncpy into a fixed buffer, which GCC 12
 // flags; the truncation is intended there.
+#if defined(__GNUC__) && !defined(__clang__)
 #pragma GCC diagnostic push
 #pragma GCC diagnostic ignored "-Wstringop-truncation"
+#endif
 #include <libfccp/csv.h>
+#if defined(__GNUC__) && !defined(__clang__)
 #pragma GCC diagnostic pop
+#endif
 
 #include "lanechange/error.hpp"
 

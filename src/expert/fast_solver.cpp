@@ -10,6 +10,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdint>
+#include <utility>
 
 #include "lanechange/expert/lane_change_solver.hpp"
 #include "lanechange/expert/structured_qp.hpp"
@@ -451,7 +452,7 @@ LaneChangeSolution FastLaneChangeSolver::solve(const LaneChangeQp& qp, const Miq
     NodeOutcome o;
     if (root_pending) {
       modes = root_modes;
-      o = std::move(root);
+      o = std::exchange(root, NodeOutcome{});
       root_pending = false;
     } else {
       modes = std::move(ws->stack.back());
@@ -477,6 +478,7 @@ LaneChangeSolution FastLaneChangeSolver::solve(const LaneChangeQp& qp, const Miq
     // nearest is pushed last so that it is explored first.
     const auto& options = qp.node_modes[k];
     std::vector<std::pair<double, int>> order;
+    order.reserve(options.size());
     for (int m = 0; m < static_cast<int>(options.size()); ++m) {
       order.emplace_back(mode_violation(options[m], o.path.states[k]), m);
     }
