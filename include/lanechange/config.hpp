@@ -88,8 +88,13 @@ struct ExpertSettings {
   double weight_yaw_rate = 1e-6;
   JerkWeighting jerk_weighting = JerkWeighting::Derivative;
   LaneRule lane_rule = LaneRule::EitherOr;
-  int max_iterations = 10;              ///< linearization rounds
-  double convergence_tolerance = 0.1;   ///< m, largest change of x and y between rounds
+  int max_iterations = 10;             ///< linearization rounds
+  double convergence_tolerance = 0.1;  ///< m, largest change of x and y between rounds
+  /// m: a round whose solution is this close to the one two rounds back,
+  /// while consecutive rounds still differ by more than the convergence
+  /// tolerance, has locked into a 2-cycle that no later round leaves; the plan
+  /// stops there (status cycling, a failure like the round limit). 0: off.
+  double cycle_tolerance = 1e-3;
   double big_m = 1000.0;                ///< m; must exceed any distance a lane constraint relaxes
   bool fix_terminal_lateral = true;     ///< y(t_f) = w as a constraint (authors' code)
   bool constrain_initial_node = false;  ///< apply the lane rules at t = 0 too (authors' code)

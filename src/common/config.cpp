@@ -41,6 +41,7 @@ void Config::validate() const {
           "expert", "cost weights must not be negative");
   require(expert.max_iterations >= 1, "expert.max_iterations", "must be at least 1");
   require(expert.convergence_tolerance > 0, "expert.convergence_tolerance", "must be positive");
+  require(expert.cycle_tolerance >= 0, "expert.cycle_tolerance", "must not be negative");
   require(expert.big_m > 0, "expert.big_m", "must be positive");
   require(expert.prediction_lead_steps >= 0 && expert.prediction_lead_steps <= 10,
           "expert.prediction_lead_steps", "must be in [0, 10]");

@@ -81,6 +81,7 @@ void visit_fields(V& v, S& s) requires std::same_as<std::remove_const_t<S>, Expe
   v("lane_rule", s.lane_rule);
   v("max_iterations", s.max_iterations);
   v("convergence_tolerance", s.convergence_tolerance);
+  v("cycle_tolerance", s.cycle_tolerance);
   v("big_m", s.big_m);
   v("fix_terminal_lateral", s.fix_terminal_lateral);
   v("constrain_initial_node", s.constrain_initial_node);

@@ -13,6 +13,7 @@ std::string_view to_string(PlanStatus status) {
   switch (status) {
     case PlanStatus::Converged: return "converged";
     case PlanStatus::IterationLimit: return "iteration_limit";
+    case PlanStatus::Cycling: return "cycling";
     case PlanStatus::Infeasible: return "infeasible";
     case PlanStatus::TimeLimit: return "time_limit";
     case PlanStatus::SolverError: return "solver_error";
@@ -71,6 +72,7 @@ ExpertResult ExpertPlanner::plan(const Scenario& scenario, const PlanLimits& lim
   const bool reactive = scenario.behavior == Behavior::Idm;
   const auto workspace = solver_->make_workspace();
   std::vector<int> mode_hint;
+  Iterate two_back;  // the solution of the round before the last
   for (int round = 1; round <= config.expert.max_iterations; ++round) {
     if (reactive) {
       const auto ego_path = footprint_of(point);
@@ -104,13 +106,30 @@ ExpertResult ExpertPlanner::plan(const Scenario& scenario, const PlanLimits& lim
       return result;
     }
     if (round > 1) report.max_change = largest_position_change(solution.path, result.path);
+    const double repeat = round > 2 ? largest_position_change(solution.path, two_back) : kInfinity;
+    const bool cycling = repeat <= config.expert.cycle_tolerance &&
+                         report.max_change > config.expert.convergence_tolerance;
     result.rounds.push_back(report);
+    two_back = std::move(result.path);
     result.path = solution.path;
     result.modes = solution.modes;
     result.objective = solution.objective;
     point = solution.path;
     if (round > 1 && report.max_change <= config.expert.convergence_tolerance) {
       result.status = PlanStatus::Converged;
+      result.total_ms = elapsed_ms(start);
+      return result;
+    }
+    if (cycling) {
+      // The next round starts where the last but one did, so it repeats it:
+      // the rounds alternate between two paths and never converge.
+      result.status = PlanStatus::Cycling;
+      char reason[160];
+      std::snprintf(reason, sizeof reason,
+                    "round %d repeats round %d (to %.1e m) while consecutive rounds differ by "
+                    "%.3f m: the rounds alternate between two paths",
+                    round, round - 2, repeat, report.max_change);
+      result.reason = reason;
       result.total_ms = elapsed_ms(start);
       return result;
     }

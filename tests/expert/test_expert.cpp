@@ -4,6 +4,8 @@
 
 #include <cmath>
 #include <fstream>
+#include <memory>
+#include <nlohmann/json.hpp>
 
 #include "../foundation/test_helpers.hpp"
 #include "lanechange/audit.hpp"
@@ -197,6 +199,39 @@ TEST(Planner, SampledPlansPassTheAudit) {
     }
   }
   EXPECT_GT(solved, 0);
+}
+
+// A sampled scenario (seed 2026, index 41) whose rounds settle into a 2-cycle:
+// two lane-change paths about a metre apart, each the best answer to the other's
+// linearization.
+Scenario cycling_scenario() {
+  return scenario_from_json(nlohmann::json::parse(R"({
+    "format": "lanechange.scenario/1", "lane_width": 3.75, "behavior": "constant_accel",
+    "ego": {"x": 0.0, "y": 0.0, "v": 8.683847126070834, "theta": 0.0, "a": 0.0},
+    "leader": {"x": 36.46241631402696, "v": 8.534950072799933, "a": 0.20758741955206106},
+    "follower": {"x": 8.626268446109087, "v": 6.195851938053886, "a": -0.32241094597418973},
+    "target": {"x": 30.458004003365353, "v": 7.07590205780297, "a": 0.7107703710394668}})"),
+                            Config{});
+}
+
+TEST(Planner, StopsRoundsThatAlternateBetweenTwoPaths) {
+  Config config;
+  config.expert.cycle_tolerance = 0.0;
+  const ExpertPlanner patient(config, std::make_shared<FastLaneChangeSolver>());
+  const ExpertResult full = patient.plan(cycling_scenario());
+  ASSERT_EQ(full.status, PlanStatus::IterationLimit) << full.reason;
+  ASSERT_EQ(full.iterations(), config.expert.max_iterations);
+
+  config.expert.cycle_tolerance = 1e-3;
+  const ExpertPlanner planner(config, std::make_shared<FastLaneChangeSolver>());
+  const ExpertResult early = planner.plan(cycling_scenario());
+  EXPECT_EQ(early.status, PlanStatus::Cycling) << early.reason;
+  EXPECT_LT(early.iterations(), full.iterations());
+  EXPECT_GT(early.rounds.back().max_change, config.expert.convergence_tolerance);
+  // The rounds it skipped would have kept alternating: the last full round's
+  // change is as large as the one where the early stop saw the cycle.
+  EXPECT_GT(full.rounds.back().max_change, config.expert.convergence_tolerance);
+  EXPECT_EQ(planner.to_trajectory(early, cycling_scenario()).label, Label::Failure);
 }
 
 TEST(Audit, CatchesTamperedPlans) {

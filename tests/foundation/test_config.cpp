@@ -58,6 +58,8 @@ TEST(Config, RejectsUnknownKeysAndBadValuesByName) {
   EXPECT_EQ(field_of(R"({"expert": {"lane_rule": "sideways"}})"), "expert.lane_rule");
   EXPECT_EQ(field_of(R"({"preset": "nobody"})"), "preset");
   EXPECT_EQ(field_of(R"({"idm": {"max_accel": "fast"}})"), "idm.max_accel");
+  EXPECT_EQ(field_of(R"({"expert": {"cycle_tolerance": -1e-3}})"), "expert.cycle_tolerance");
+  EXPECT_EQ(field_of(R"({"expert": {"cycle_tolerance": 0}})"), "<accepted>");
 }
 
 }  // namespace

@@ -19,6 +19,7 @@ namespace lanechange::expert {
 enum class PlanStatus {
   Converged,       ///< the rounds' solutions stopped changing
   IterationLimit,  ///< the round limit came first (a failure, as in the authors' code)
+  Cycling,         ///< the rounds alternate between two paths (config.expert.cycle_tolerance)
   Infeasible,      ///< a round's MIQP has no solution: no safe lane change exists
   TimeLimit,       ///< the time limit came first
   SolverError,     ///< the back-end failed
