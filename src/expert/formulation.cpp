@@ -87,9 +87,15 @@ std::vector<LaneMode> lane_modes(const CarRows& r, LaneRule rule, double boundar
   }
   // Footprint: the body is in every lane it touches. Touching both lanes
   // needs every row; the y rows of the one-lane modes keep the body clear of
-  // the lane line.
+  // the lane line. The both-lanes mode is limited to the band where the body
+  // does touch the line: outside it, its points already belong to a one-lane
+  // mode (they keep that mode's rows and more), so the union of the modes is
+  // the same, but a relaxation no longer lets a "both lanes" node sit anywhere
+  // across the road, and the modes no longer overlap.
   return {{LaneOccupancy::EgoLane, {r.behind_leader, row(0, 1, 0, boundary - half_width)}},
-          {LaneOccupancy::BothLanes, {r.behind_leader, r.ahead_of_follower, r.behind_target}},
+          {LaneOccupancy::BothLanes,
+           {r.behind_leader, r.ahead_of_follower, r.behind_target,
+            row(0, 1, 0, boundary + half_width), row(0, -1, 0, -(boundary - half_width))}},
           {LaneOccupancy::TargetLane,
            {r.ahead_of_follower, r.behind_target, row(0, -1, 0, -(boundary + half_width))}}};
 }
