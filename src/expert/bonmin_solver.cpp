@@ -22,6 +22,8 @@
 #include <utility>
 #include <vector>
 
+#include "expert/coin_glue.hpp"
+
 // Defined in libbonmin (BonCbc.cpp). Bonmin's SIGINT handler sets it, and while it is
 // set every later NLP is reported infeasible, so each solve clears it first.
 extern bool BonminAbortAll;  // NOLINT(readability-identifier-naming)
@@ -30,45 +32,13 @@ namespace lanechange::expert {
 namespace {
 
 using Clock = std::chrono::steady_clock;
+using coin::milliseconds_since;
+using coin::set_option;
+using coin::SparseTriplets;
+using coin::triplets_of;
+using coin::write_triplets;
 using Ipopt::Index;
 using Ipopt::Number;
-
-double milliseconds_since(Clock::time_point start) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
-}
-
-struct SparseTriplets {
-  std::vector<Index> rows;
-  std::vector<Index> cols;
-  std::vector<Number> values;
-
-  [[nodiscard]] Index size() const { return static_cast<Index>(values.size()); }
-};
-
-SparseTriplets triplets_of(const Eigen::SparseMatrix<double>& matrix, bool lower_triangle_only) {
-  SparseTriplets triplets;
-  for (int outer = 0; outer < matrix.outerSize(); ++outer) {
-    for (Eigen::SparseMatrix<double>::InnerIterator it(matrix, outer); it; ++it) {
-      if (lower_triangle_only && it.row() < it.col()) continue;
-      triplets.rows.push_back(static_cast<Index>(it.row()));
-      triplets.cols.push_back(static_cast<Index>(it.col()));
-      triplets.values.push_back(it.value());
-    }
-  }
-  return triplets;
-}
-
-// Ipopt asks once for the structure (values == nullptr), then only for values.
-bool write_triplets(const SparseTriplets& triplets, Number scale, Index* i_row, Index* j_col,
-                    Number* values) {
-  if (values == nullptr) {
-    std::copy(triplets.rows.begin(), triplets.rows.end(), i_row);
-    std::copy(triplets.cols.begin(), triplets.cols.end(), j_col);
-  } else {
-    for (Index e = 0; e < triplets.size(); ++e) values[e] = scale * triplets.values[e];
-  }
-  return true;
-}
 
 struct ColumnBounds {
   Eigen::VectorXd lower;
@@ -149,24 +119,13 @@ class MiqpTminlp final : public Bonmin::TMINLP {
 
   bool get_bounds_info(Index n, Number* x_l, Number* x_u, Index m, Number* g_l,
                        Number* g_u) override {
-    Eigen::Map<Eigen::VectorXd>(x_l, n) = bounds_.lower;
-    Eigen::Map<Eigen::VectorXd>(x_u, n) = bounds_.upper;
-    Eigen::Map<Eigen::VectorXd>(g_l, m) = problem_.row_lower;
-    Eigen::Map<Eigen::VectorXd>(g_u, m) = problem_.row_upper;
+    callbacks().bounds(n, x_l, x_u, m, g_l, g_u);
     return true;
   }
 
   bool get_starting_point(Index n, bool init_x, Number* x, bool init_z, Number* z_l, Number* z_u,
                           Index m, bool init_lambda, Number* lambda) override {
-    if (init_x) {
-      Eigen::Map<Eigen::VectorXd>(x, n) =
-          Eigen::VectorXd::Zero(n).cwiseMax(bounds_.lower).cwiseMin(bounds_.upper);
-    }
-    if (init_z) {
-      std::fill_n(z_l, n, 0.0);
-      std::fill_n(z_u, n, 0.0);
-    }
-    if (init_lambda) std::fill_n(lambda, m, 0.0);
+    callbacks().starting_point(n, init_x, x, init_z, z_l, z_u, m, init_lambda, lambda);
     return true;
   }
 
@@ -176,14 +135,12 @@ class MiqpTminlp final : public Bonmin::TMINLP {
   }
 
   bool eval_grad_f(Index n, const Number* x, bool, Number* grad_f) override {
-    const Eigen::Map<const Eigen::VectorXd> point(x, n);
-    Eigen::Map<Eigen::VectorXd>(grad_f, n) = problem_.hessian * point + problem_.gradient;
+    callbacks().objective_gradient(n, x, grad_f);
     return true;
   }
 
   bool eval_g(Index n, const Number* x, bool, Index m, Number* g) override {
-    Eigen::Map<Eigen::VectorXd>(g, m) =
-        problem_.constraints * Eigen::Map<const Eigen::VectorXd>(x, n);
+    callbacks().rows(n, x, m, g);
     return true;
   }
 
@@ -229,6 +186,11 @@ class MiqpTminlp final : public Bonmin::TMINLP {
  private:
   using RowMajorMatrix = Eigen::SparseMatrix<double, Eigen::RowMajor>;
 
+  [[nodiscard]] coin::LinearRowsQp callbacks() const {
+    return {problem_.hessian, problem_.gradient,  problem_.constraints, bounds_.lower,
+            bounds_.upper,    problem_.row_lower, problem_.row_upper};
+  }
+
   const MiqpProblem& problem_;
   ColumnBounds bounds_;
   SparseTriplets hessian_lower_;
@@ -236,16 +198,6 @@ class MiqpTminlp final : public Bonmin::TMINLP {
   RowMajorMatrix rows_;
   SolverReturn final_status_ = MINLP_ERROR;
 };
-
-void set_option(Ipopt::OptionsList& options, const std::string& name, const std::string& value) {
-  if (!options.SetStringValue(name, value)) throw std::invalid_argument("Bonmin option " + name);
-}
-void set_option(Ipopt::OptionsList& options, const std::string& name, double value) {
-  if (!options.SetNumericValue(name, value)) throw std::invalid_argument("Bonmin option " + name);
-}
-void set_option(Ipopt::OptionsList& options, const std::string& name, int value) {
-  if (!options.SetIntegerValue(name, value)) throw std::invalid_argument("Bonmin option " + name);
-}
 
 void silence(Ipopt::OptionsList& options) {
   for (const char* log_level :

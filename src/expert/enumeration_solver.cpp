@@ -16,43 +16,20 @@
 #include <utility>
 #include <vector>
 
+#include "expert/coin_glue.hpp"
 #include "lanechange/expert/bonmin_solver.hpp"
 
 namespace lanechange::expert {
 namespace {
 
 using Clock = std::chrono::steady_clock;
+using coin::milliseconds_since;
+using coin::set_option;
+using coin::SparseTriplets;
+using coin::triplets_of;
+using coin::write_triplets;
 using Ipopt::Index;
 using Ipopt::Number;
-
-double milliseconds_since(Clock::time_point start) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
-}
-
-struct SparseTriplets {
-  std::vector<Index> rows;
-  std::vector<Index> cols;
-  std::vector<Number> values;
-
-  void add(Index row, Index col, Number value) {
-    rows.push_back(row);
-    cols.push_back(col);
-    values.push_back(value);
-  }
-  [[nodiscard]] Index size() const { return static_cast<Index>(values.size()); }
-};
-
-SparseTriplets triplets_of(const Eigen::SparseMatrix<double>& matrix, bool lower_triangle_only) {
-  SparseTriplets triplets;
-  for (int outer = 0; outer < matrix.outerSize(); ++outer) {
-    for (Eigen::SparseMatrix<double>::InnerIterator it(matrix, outer); it; ++it) {
-      if (!lower_triangle_only || it.row() >= it.col()) {
-        triplets.add(static_cast<Index>(it.row()), static_cast<Index>(it.col()), it.value());
-      }
-    }
-  }
-  return triplets;
-}
 
 // The QP over the variables left free once the binaries (and any continuous variable
 // with equal bounds) are fixed. Eliminating the fixed variables, rather than fixing
@@ -237,24 +214,13 @@ class ReducedQpTnlp final : public Ipopt::TNLP {
 
   bool get_bounds_info(Index n, Number* x_l, Number* x_u, Index m, Number* g_l,
                        Number* g_u) override {
-    Eigen::Map<Eigen::VectorXd>(x_l, n) = qp_.col_lower;
-    Eigen::Map<Eigen::VectorXd>(x_u, n) = qp_.col_upper;
-    Eigen::Map<Eigen::VectorXd>(g_l, m) = qp_.row_lower;
-    Eigen::Map<Eigen::VectorXd>(g_u, m) = qp_.row_upper;
+    callbacks().bounds(n, x_l, x_u, m, g_l, g_u);
     return true;
   }
 
   bool get_starting_point(Index n, bool init_x, Number* x, bool init_z, Number* z_l, Number* z_u,
                           Index m, bool init_lambda, Number* lambda) override {
-    if (init_x) {
-      Eigen::Map<Eigen::VectorXd>(x, n) =
-          Eigen::VectorXd::Zero(n).cwiseMax(qp_.col_lower).cwiseMin(qp_.col_upper);
-    }
-    if (init_z) {
-      std::fill_n(z_l, n, 0.0);
-      std::fill_n(z_u, n, 0.0);
-    }
-    if (init_lambda) std::fill_n(lambda, m, 0.0);
+    callbacks().starting_point(n, init_x, x, init_z, z_l, z_u, m, init_lambda, lambda);
     return true;
   }
 
@@ -265,14 +231,12 @@ class ReducedQpTnlp final : public Ipopt::TNLP {
   }
 
   bool eval_grad_f(Index n, const Number* x, bool, Number* grad_f) override {
-    const Eigen::Map<const Eigen::VectorXd> point(x, n);
-    Eigen::Map<Eigen::VectorXd>(grad_f, n) = qp_.hessian * point + qp_.gradient;
+    callbacks().objective_gradient(n, x, grad_f);
     return true;
   }
 
   bool eval_g(Index n, const Number* x, bool, Index m, Number* g) override {
-    const Eigen::Map<const Eigen::VectorXd> point(x, n);
-    Eigen::Map<Eigen::VectorXd>(g, m) = qp_.constraints * point;
+    callbacks().rows(n, x, m, g);
     return true;
   }
 
@@ -293,16 +257,9 @@ class ReducedQpTnlp final : public Ipopt::TNLP {
   }
 
  private:
-  // Ipopt asks once for the structure (values == nullptr), then only for values.
-  static bool write_triplets(const SparseTriplets& triplets, Number scale, Index* i_row,
-                             Index* j_col, Number* values) {
-    if (values == nullptr) {
-      std::copy(triplets.rows.begin(), triplets.rows.end(), i_row);
-      std::copy(triplets.cols.begin(), triplets.cols.end(), j_col);
-    } else {
-      for (Index e = 0; e < triplets.size(); ++e) values[e] = scale * triplets.values[e];
-    }
-    return true;
+  [[nodiscard]] coin::LinearRowsQp callbacks() const {
+    return {qp_.hessian,   qp_.gradient,  qp_.constraints, qp_.col_lower,
+            qp_.col_upper, qp_.row_lower, qp_.row_upper};
   }
 
   const ReducedQp& qp_;
@@ -310,16 +267,6 @@ class ReducedQpTnlp final : public Ipopt::TNLP {
   SparseTriplets jacobian_;
   Eigen::VectorXd solution_;
 };
-
-void set_option(Ipopt::OptionsList& options, const std::string& name, const std::string& value) {
-  if (!options.SetStringValue(name, value)) throw std::invalid_argument("Ipopt option " + name);
-}
-void set_option(Ipopt::OptionsList& options, const std::string& name, double value) {
-  if (!options.SetNumericValue(name, value)) throw std::invalid_argument("Ipopt option " + name);
-}
-void set_option(Ipopt::OptionsList& options, const std::string& name, int value) {
-  if (!options.SetIntegerValue(name, value)) throw std::invalid_argument("Ipopt option " + name);
-}
 
 // The caller holds lock_coin_or_libraries().
 Ipopt::SmartPtr<Ipopt::IpoptApplication> make_ipopt(const MiqpSettings& settings) {
