@@ -30,10 +30,7 @@ struct FastWorkspace final : LaneChangeWorkspace {
   std::vector<std::vector<int>> stack;  // mode assignments waiting to be solved
   std::vector<Control> start_controls;
   long iterations = 0;         // of the interior-point method, for the solution's statistics
-  long cutoffs = 0;            // nodes discarded by a dual bound before their QP converged
   unsigned needed_bounds = 0;  // state components whose bounds this round's QPs carry
-  // LaneChangeQp::objective minus the QP's stage costs: the constant terms.
-  double objective_offset = 0.0;
 };
 
 void add_row(QpStage& stage, const Eigen::Vector4d& g_state, double d, bool soft) {
@@ -56,11 +53,8 @@ void add_control_bound(QpStage& stage, int component, double lo, double hi) {
 }
 
 // The round's QP without lane rows, in the solver's stage form.
-void build_base(const LaneChangeQp& qp, StructuredQp& out, double& objective_offset) {
+void build_base(const LaneChangeQp& qp, StructuredQp& out) {
   const int n = qp.steps;
-  objective_offset = qp.terminal_x_weight * qp.terminal_x_reference * qp.terminal_x_reference;
-  for (double w : qp.lateral_weight)
-    objective_offset += w * qp.lateral_reference * qp.lateral_reference;
   out.stages.resize(n + 1);
   out.initial_state.head<4>() = qp.initial_state;
   out.initial_state[4] = 0.0;
@@ -241,20 +235,19 @@ NodeOutcome solve_node_with(const LaneChangeQp& qp, const std::vector<int>& mode
   ws.qp_workspace.setup(ws.node);
   ws.qp_workspace.set_initial_controls(ws.start_controls);
   QpSettings settings;
+  // The QP's objective leaves out LaneChangeQp::objective's constant.
+  const double qp_cutoff = cutoff - qp.objective_constant();
   // A hair above the cutoff: a node this close is decided by its converged objective.
-  settings.objective_cutoff = cutoff - ws.objective_offset + 1e-9 * (1.0 + std::abs(cutoff));
+  settings.objective_cutoff = qp_cutoff + 1e-9 * (1.0 + std::abs(cutoff));
   if (coarse) {
     // Clearly below the cutoff: this node will be branched on, and a rough
     // point tells where as well as the optimum does.
-    settings.coarse_below = cutoff - ws.objective_offset - 1e-2 * (1.0 + std::abs(cutoff));
+    settings.coarse_below = qp_cutoff - 1e-2 * (1.0 + std::abs(cutoff));
   }
   const QpResult r = solve_structured_qp(ws.node, ws.qp_workspace, settings);
   NodeOutcome out;
   out.iterations = r.iterations;
-  if (r.status == QpStatus::Cutoff) {
-    ++ws.cutoffs;
-    return out;
-  }
+  if (r.status == QpStatus::Cutoff) return out;
   if (r.status == QpStatus::NumericalError || r.status == QpStatus::IterationLimit) {
     out.numerical_failure = true;
     return out;
@@ -390,7 +383,7 @@ LaneChangeSolution FastLaneChangeSolver::solve(const LaneChangeQp& qp, const Miq
       return out;
     }
   }
-  build_base(qp, ws->base, ws->objective_offset);
+  build_base(qp, ws->base);
   ws->needed_bounds = 0;
   ws->node = ws->base;
   ws->start_controls.assign(n, Control::Zero());

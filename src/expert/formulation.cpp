@@ -174,6 +174,12 @@ double LaneChangeQp::objective(const Iterate& path) const {
   return total + terminal_x_weight * dx * dx;
 }
 
+double LaneChangeQp::objective_constant() const {
+  double constant = terminal_x_weight * terminal_x_reference * terminal_x_reference;
+  for (double w : lateral_weight) constant += w * lateral_reference * lateral_reference;
+  return constant;
+}
+
 namespace {
 
 double mode_violation(const LaneMode& mode, const State& z) {

@@ -240,19 +240,25 @@ struct InteriorPointMethod {
   // from one adjoint pass; near a solution it is the dual residual and the
   // bound closes on the optimum, and a node far above the cutoff shows it
   // long before the method converges.
-  [[nodiscard]] double dual_bound() {
+  // Needs measure_and_gradient() first; `f` is objective() at this iterate.
+  [[nodiscard]] double dual_bound(double f) {
+    // From the Lagrangian's gradient, which holds every row: take out the
+    // rows that stay constraints, and the part of a soft row's multiplier
+    // above the price.
     auto& gradient = ws.grad_;  // scratch: the Newton steps overwrite it
-    double lagrangian = objective();
-    for (int k = 0; k <= n; ++k) gradient[k] = qp.stages[k].H * ws.w_[k] + qp.stages[k].h;
+    gradient = ws.grad_base_;
+    double lagrangian = f;
     if (qp.has_terminal_equality) {
-      gradient[n] += qp.terminal_g * ws.terminal_multiplier_;
       lagrangian += ws.terminal_multiplier_ * (qp.terminal_g.dot(ws.w_[n]) - qp.terminal_d);
     }
     for_each_row([&](int k, const QpRow& row, int i) {
-      if (ws.control_box_[i]) return;
+      if (ws.control_box_[i]) {
+        add_row_times(row, i, -ws.lambda_[i], gradient[k]);
+        return;
+      }
       const double lambda = row.soft ? std::min(ws.lambda_[i], qp.softness_weight) : ws.lambda_[i];
+      if (lambda != ws.lambda_[i]) add_row_times(row, i, lambda - ws.lambda_[i], gradient[k]);
       lagrangian += lambda * (row_dot(row, i, ws.w_[k]) - row.d);
-      add_row_times(row, i, lambda, gradient[k]);
     });
     QpStateVector adjoint = gradient[n].head<kQpStates>();
     double bound = lagrangian;
@@ -485,14 +491,14 @@ struct InteriorPointMethod {
       // scaled by barrier weights of 1e12 and more, so the dual residual can
       // stall at 1e-2 while the primal point and its objective no longer move
       // (to 1e-12): that point is the solution.
+      const double f = objective();
       if (settings.objective_cutoff < kInfinityResidual && iteration > 0) {
-        result.lower_bound = std::max(result.lower_bound, dual_bound());
+        result.lower_bound = std::max(result.lower_bound, dual_bound(f));
         if (result.lower_bound >= settings.objective_cutoff) {
           result.status = QpStatus::Cutoff;
           return result;
         }
       }
-      const double f = objective();
       if (f < settings.coarse_below && mu <= settings.coarse_tolerance &&
           primal <= settings.coarse_tolerance && max_softness() <= settings.coarse_tolerance) {
         result.status = QpStatus::Coarse;

@@ -76,6 +76,9 @@ struct LaneChangeQp {
 
   /// The objective of a trajectory (states and controls as in Iterate).
   [[nodiscard]] double objective(const Iterate& path) const;
+  /// The part of objective() that no state or control changes (the squared
+  /// references of the lateral and terminal-x terms).
+  [[nodiscard]] double objective_constant() const;
   /// Largest violation of dynamics, bounds and lane logic (0 when feasible).
   [[nodiscard]] double max_violation(const Iterate& path) const;
   /// The mode of node k that path satisfies best (smallest largest violation).
