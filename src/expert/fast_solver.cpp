@@ -438,6 +438,7 @@ LaneChangeSolution FastLaneChangeSolver::solve(const LaneChangeQp& qp, const Miq
     if (elapsed > settings.time_limit_s || out.nodes >= settings.node_limit) {
       out.status = elapsed > settings.time_limit_s ? MiqpStatus::TimeLimit : MiqpStatus::NodeLimit;
       out.solve_ms = elapsed * 1000.0;
+      out.qp_iterations = ws->iterations;
       if (out.has_solution()) out.modes = modes_of(qp, out.path);
       return out;
     }
