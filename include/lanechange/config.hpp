@@ -104,6 +104,11 @@ struct ExpertSettings {
   /// Node k is checked against the other cars' prediction at node k + this
   /// (the authors' code has an off-by-one of 1).
   int prediction_lead_steps = 0;
+  /// Keep the heading at or above 0 (from the first node the yaw rate can
+  /// reach it), so y never decreases: the plan cannot swing back towards the
+  /// ego lane to take a run-up at the line (docs/closed_loop.md). Not in the
+  /// paper, whose labels call such plans ill-posed instead.
+  bool monotone_lateral = false;
   WarmStart warm_start = WarmStart::Quintic;
   /// Where the warm start and the terminal-x term aim: behind the target by
   /// its safe distance (NOTES.md), or at the target itself (authors' code).
@@ -141,6 +146,32 @@ struct SamplerSettings {
   Interval accel{-1.0, 1.0};              ///< m/s^2, for constant_accel
 };
 
+/// How the expert re-plans in closed loop (docs/closed_loop.md).
+enum class HorizonMode {
+  Receding,   ///< every re-plan looks expert.horizon ahead
+  Shrinking,  ///< the re-plans end at the first plan's t_f (down to min_horizon)
+};
+
+/// The closed loop: the simulator, the fallback and lane keeper, the
+/// receding-horizon expert and the hierarchical planner (docs/closed_loop.md).
+struct ClosedLoopSettings {
+  double settle_time = 3.0;       ///< s the run goes on after the planning horizon
+  double step_budget_ms = 100.0;  ///< a planner that takes longer is overruled for the step
+  int replan_period = 1;          ///< the expert re-plans every this many steps
+  /// Shrinking: a receding plan keeps putting the crossing off to its end
+  /// and waits at the line (docs/closed_loop.md).
+  HorizonMode horizon_mode = HorizonMode::Shrinking;
+  /// The closed-loop expert plans with expert.monotone_lateral on: without
+  /// it, its plans swing back before the line to take a run-up.
+  bool monotone_lateral = true;
+  double min_horizon = 1.0;           ///< s: the shrinking horizon stops shrinking here
+  double settled_heading = 0.035;     ///< rad (2 deg): the manoeuvre is over when |theta| is below
+  double settled_offset = 0.25;       ///< m from the target-lane centre, with the heading above
+  double keeper_lateral_gain = 0.08;  ///< rad per m of offset from the lane centre (lane keeper)
+  double keeper_heading_gain = 1.2;   ///< 1/s: yaw rate per rad of heading error
+  double lookahead = 1.0;             ///< s the hierarchical planner checks its policy ahead
+};
+
 struct Config {
   std::string preset = "paper";
   double lane_width = 3.75;  ///< m
@@ -153,6 +184,7 @@ struct Config {
   ExpertSettings expert;
   LabelTolerances labels;
   SamplerSettings sampler;
+  ClosedLoopSettings closed_loop;
 
   [[nodiscard]] double dt() const { return expert.horizon / expert.steps; }
   /// Throws InputError when a value is non-finite or out of its physical range.

@@ -13,6 +13,18 @@ void require(bool ok, const char* field, const char* problem) {
   if (!ok) throw InputError(field, problem);
 }
 
+void validate_closed_loop(const ClosedLoopSettings& c) {
+  require(c.settle_time >= 0, "closed_loop.settle_time", "must not be negative");
+  require(c.step_budget_ms > 0, "closed_loop.step_budget_ms", "must be positive");
+  require(c.replan_period >= 1, "closed_loop.replan_period", "must be at least 1");
+  require(c.min_horizon > 0, "closed_loop.min_horizon", "must be positive");
+  require(c.settled_heading > 0 && c.settled_offset > 0, "closed_loop",
+          "settled_heading and settled_offset must be positive");
+  require(c.keeper_lateral_gain > 0 && c.keeper_heading_gain > 0, "closed_loop",
+          "the lane keeper's gains must be positive");
+  require(c.lookahead >= 0, "closed_loop.lookahead", "must not be negative");
+}
+
 }  // namespace
 
 void Config::validate() const {
@@ -53,6 +65,7 @@ void Config::validate() const {
           "sampler", "speeds must not be negative");
   require(sampler.leader_headway.lo >= 0, "sampler.leader_headway", "must not be negative");
   require(sampler.gap_length.lo >= 0, "sampler.gap_length", "must not be negative");
+  validate_closed_loop(closed_loop);
 }
 
 namespace {

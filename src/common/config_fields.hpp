@@ -31,6 +31,25 @@ inline constexpr std::array<detail::EnumName<ReversalReference>, 2> enum_names(R
            {ReversalReference::RunningMax, "running_max"}}};
 }
 
+inline constexpr std::array<detail::EnumName<HorizonMode>, 2> enum_names(HorizonMode) {
+  return {{{HorizonMode::Receding, "receding"}, {HorizonMode::Shrinking, "shrinking"}}};
+}
+
+template <class V, class S>
+void visit_fields(V& v, S& s) requires std::same_as<std::remove_const_t<S>, ClosedLoopSettings> {
+  v("settle_time", s.settle_time);
+  v("step_budget_ms", s.step_budget_ms);
+  v("replan_period", s.replan_period);
+  v("horizon_mode", s.horizon_mode);
+  v("monotone_lateral", s.monotone_lateral);
+  v("min_horizon", s.min_horizon);
+  v("settled_heading", s.settled_heading);
+  v("settled_offset", s.settled_offset);
+  v("keeper_lateral_gain", s.keeper_lateral_gain);
+  v("keeper_heading_gain", s.keeper_heading_gain);
+  v("lookahead", s.lookahead);
+}
+
 template <class V, class S>
 void visit_fields(V& v, S& s) requires std::same_as<std::remove_const_t<S>, VehicleSize> {
   v("length", s.length);
@@ -86,6 +105,7 @@ void visit_fields(V& v, S& s) requires std::same_as<std::remove_const_t<S>, Expe
   v("fix_terminal_lateral", s.fix_terminal_lateral);
   v("constrain_initial_node", s.constrain_initial_node);
   v("prediction_lead_steps", s.prediction_lead_steps);
+  v("monotone_lateral", s.monotone_lateral);
   v("warm_start", s.warm_start);
   v("aim_behind_target", s.aim_behind_target);
 }
@@ -123,6 +143,7 @@ void visit_fields(V& v, S& s) requires std::same_as<std::remove_const_t<S>, Conf
   v("expert", s.expert);
   v("labels", s.labels);
   v("sampler", s.sampler);
+  v("closed_loop", s.closed_loop);
 }
 
 }  // namespace lanechange

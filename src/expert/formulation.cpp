@@ -137,7 +137,12 @@ LaneChangeQp build_lane_change_qp(const Scenario& s, const Config& config, const
   for (int k = 0; k <= n; ++k) {
     const double t = k * qp.dt;
     State lo, hi;
-    lo << s.ego.x - kXSlack, -s.limits.lateral_margin, s.limits.v.lo, -std::numbers::pi / 2;
+    // "y never decreases" as a constraint: a heading of at least 0, from the
+    // first node the yaw rate can bring it there.
+    const double lowest_heading = e.monotone_lateral
+                                      ? std::min(0.0, s.ego.theta + s.limits.omega.hi * t)
+                                      : -std::numbers::pi / 2;
+    lo << s.ego.x - kXSlack, -s.limits.lateral_margin, s.limits.v.lo, lowest_heading;
     hi << s.ego.x + s.limits.v.hi * t + kXSlack, s.lane_width + s.limits.lateral_margin,
         s.limits.v.hi, std::numbers::pi / 2;
     qp.state_lower.push_back(lo);

@@ -72,7 +72,8 @@ std::vector<std::optional<LaneOccupancy>> occupancy_of(const LaneChangeQp& qp,
 
 }  // namespace
 
-ExpertResult ExpertPlanner::plan(const Scenario& scenario, const PlanLimits& limits) const {
+ExpertResult ExpertPlanner::plan(const Scenario& scenario, const PlanLimits& limits,
+                                 const PlanHints& hints) const {
   const auto start = Clock::now();
   const Config config = effective_config(config_, scenario);
   const int steps = scenario.steps;
@@ -80,7 +81,11 @@ ExpertResult ExpertPlanner::plan(const Scenario& scenario, const PlanLimits& lim
   const int predicted_steps = steps + config.expert.prediction_lead_steps;
   ExpertResult result;
   result.prediction = predict_traffic(scenario, config, predicted_steps, dt);
-  Iterate point = warm_start(scenario, config, result.prediction);
+  const auto nodes = static_cast<std::size_t>(steps) + 1;
+  const bool path_fits = hints.path != nullptr && hints.path->states.size() == nodes &&
+                         hints.path->controls.size() == nodes - 1;
+  Iterate point = path_fits ? *hints.path : warm_start(scenario, config, result.prediction);
+  const bool modes_fit = hints.modes != nullptr && hints.modes->size() == nodes;
   const bool reactive = scenario.behavior == Behavior::Idm;
   const auto workspace = solver_->make_workspace();
   std::vector<int> mode_hint;
@@ -95,7 +100,9 @@ ExpertResult ExpertPlanner::plan(const Scenario& scenario, const PlanLimits& lim
     settings.time_limit_s = std::max(0.001, limits.time_limit_s - elapsed_ms(start) / 1000.0);
     // The previous round's lane modes (the warm start's, first) are a good
     // first guess; the back-end proves or improves on them.
-    if (result.modes.empty()) {
+    if (result.modes.empty() && modes_fit) {
+      mode_hint = *hints.modes;
+    } else if (result.modes.empty()) {
       mode_hint.assign(steps + 1, -1);
       for (int k = 0; k <= steps; ++k) {
         if (!qp.node_modes[k].empty()) mode_hint[k] = qp.best_mode(point, k);

@@ -57,6 +57,14 @@ struct PlanLimits {
   double time_limit_s = 60.0;  ///< whole plan
 };
 
+/// Where to start when a good guess is at hand (a re-plan in closed loop
+/// starts from the last plan shifted by a step). Ignored when the sizes do
+/// not fit the scenario's steps.
+struct PlanHints {
+  const Iterate* path = nullptr;            ///< the first linearization point
+  const std::vector<int>* modes = nullptr;  ///< lane modes per node, for the first round
+};
+
 /// The initial guess (config.expert.warm_start) for a scenario.
 [[nodiscard]] Iterate warm_start(const Scenario& scenario, const Config& config,
                                  const TrafficPrediction& prediction);
@@ -66,7 +74,8 @@ class ExpertPlanner {
   /// `config` is the base; each scenario's own fields override it.
   ExpertPlanner(Config config, std::shared_ptr<const LaneChangeSolver> solver);
 
-  [[nodiscard]] ExpertResult plan(const Scenario& scenario, const PlanLimits& limits = {}) const;
+  [[nodiscard]] ExpertResult plan(const Scenario& scenario, const PlanLimits& limits = {},
+                                  const PlanHints& hints = {}) const;
 
   /// The plan as a trajectory: the controls re-simulated through the
   /// (nonlinear) discrete model, the prediction, the label and the collision

@@ -1,0 +1,98 @@
+#pragma once
+// Closed-loop planners (docs/closed_loop.md). A planner is const and shared by
+// every thread; each rollout gets its own session, which holds what the
+// planner remembers between steps (the last plan, the classifier's verdict).
+// Every step the session sees an observation, never the other cars' future,
+// and answers with a control and a status.
+#include <array>
+#include <memory>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "lanechange/config.hpp"
+#include "lanechange/ego.hpp"
+#include "lanechange/scenario.hpp"
+
+namespace lanechange::planner {
+
+/// What a planner sees at step k: the initial scene, the time, and the
+/// current state of every car.
+struct Observation {
+  const Scenario* scene = nullptr;  ///< the initial scene (t = 0)
+  int step = 0;
+  double t = 0.0;                ///< s since the start
+  EgoState ego;                  ///< ego.a is the acceleration applied in the last step
+  std::array<CarState, 3> cars;  ///< leader, follower, target (Car order)
+  [[nodiscard]] const CarState& car(Car which) const {
+    return cars[static_cast<std::size_t>(which)];
+  }
+};
+
+/// Who produced a step's control.
+enum class ActStatus {
+  Planned,   ///< the planner's own method (the expert's plan, the network)
+  TookOver,  ///< the hierarchical planner's check overruled its network: the expert acts
+  Fallback,  ///< no lane change (any more): the lane keeper in the ego lane acts
+  Failed,    ///< the planner could not act (it threw or overran); the simulator falls back
+};
+[[nodiscard]] std::string_view to_string(ActStatus status);
+
+struct Decision {
+  EgoControl control;
+  ActStatus status = ActStatus::Planned;
+  std::string reason;  ///< why a take-over or fallback happened; empty otherwise
+};
+
+/// One rollout's state.
+class PlannerSession {
+ public:
+  virtual ~PlannerSession() = default;
+  [[nodiscard]] virtual Decision act(const Observation& observation) = 0;
+};
+
+class ClosedLoopPlanner {
+ public:
+  virtual ~ClosedLoopPlanner() = default;
+  [[nodiscard]] virtual std::string_view name() const = 0;
+  /// A fresh session for a rollout of `scene` (the scene's own fields
+  /// override the planner's config, as for a plan).
+  [[nodiscard]] virtual std::unique_ptr<PlannerSession> start(const Scenario& scene) const = 0;
+};
+
+/// The lane keeper: follows the car ahead in its lane by IDM and steers to
+/// the lane centre. It is the fallback of every planner (in the ego lane,
+/// behind the leader) and drives on once a lane change is over (in the
+/// target lane, behind the target). Pure and const.
+class LaneKeeper {
+ public:
+  explicit LaneKeeper(const Config& config) : config_(config) {}
+  /// The control that keeps `lane_center`, behind `ahead` (none: free road).
+  [[nodiscard]] EgoControl control(const EgoState& ego, double lane_center,
+                                   const CarState* ahead) const;
+
+ private:
+  Config config_;
+};
+
+/// The car ahead of the ego in a lane: the leader in the ego lane, the
+/// target in the target lane (the follower once the ego is behind it).
+[[nodiscard]] const CarState* car_ahead(const Observation& observation, bool target_lane);
+
+/// The fallback's control: the lane keeper in the ego lane, or in the target
+/// lane once the ego's centre is over the line (turning back from there is
+/// the riskier move).
+[[nodiscard]] EgoControl fallback_control(const LaneKeeper& keeper, const Observation& observation);
+
+/// Clips a control to the ego's limits, also keeping the speed within its
+/// bounds over the next step. Returns true when it had to.
+bool clip_to_limits(EgoControl& control, const EgoState& ego, const Limits& limits, double dt);
+
+/// The planners by name: "miqp" (the exact expert, re-planning) and the fallback
+/// (the lane keeper alone: never changes lanes; named "keep-lane"). Throws InputError for an
+/// unknown name.
+[[nodiscard]] std::shared_ptr<const ClosedLoopPlanner> make_planner(std::string_view name,
+                                                                    const Config& config);
+[[nodiscard]] std::vector<std::string> planner_names();
+
+}  // namespace lanechange::planner

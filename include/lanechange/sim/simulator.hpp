@@ -1,0 +1,83 @@
+#pragma once
+// The closed loop (docs/closed_loop.md): a planner acts every dt against the
+// real motion of the other cars. The ego moves by the exact unicycle, the
+// others by their behavior (IDM reacting to the real ego), and one judge
+// gives every planner's rollout its outcome.
+#include <nlohmann/json.hpp>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "lanechange/config.hpp"
+#include "lanechange/planner/planner.hpp"
+#include "lanechange/scenario.hpp"
+#include "lanechange/trajectory.hpp"
+
+namespace lanechange::sim {
+
+/// The judge's verdict on a realised path.
+enum class Outcome {
+  WellPosed,  ///< success: in the target lane, no reversal, heading under the limit
+  IllPosed,   ///< in the target lane, but with a reversal or a final heading over the limit
+  Failure,    ///< not in the target lane (having left its own), or a collision
+  Aborted,    ///< stayed in its own lane, without collision: the planner chose not to change
+};
+[[nodiscard]] std::string_view to_string(Outcome outcome);
+[[nodiscard]] Outcome outcome_from_string(std::string_view name);
+
+struct SimOptions {
+  double duration = 0.0;  ///< s; 0: the scene's horizon plus closed_loop.settle_time
+};
+
+/// One step of a rollout, as the planner and the simulator saw it.
+struct StepRecord {
+  double compute_ms = 0.0;
+  planner::ActStatus status = planner::ActStatus::Planned;
+  bool lane_keeping = false;  ///< the manoeuvre was over: the lane keeper drove
+  bool clipped = false;       ///< the simulator clipped the control to the limits
+  bool overrun = false;       ///< the planner took longer than its budget
+  std::string reason;
+};
+
+/// What evaluate tabulates per rollout.
+struct RolloutMetrics {
+  double time_to_target_lane = -1.0;  ///< s until |y - w| <= labels.reach first; -1: never
+  double min_gap = 0.0;  ///< m, bumper to bumper, to a car in a lane the ego's body touches
+  double min_ttc = 0.0;  ///< s, to such a car while closing in; infinity if never closing
+  double max_abs_accel = 0.0;
+  double rms_jerk = 0.0;  ///< m/s^3, of the applied acceleration
+  double max_abs_omega = 0.0;
+  double median_step_ms = 0.0;
+  double max_step_ms = 0.0;
+  int takeovers = 0;
+  int fallbacks = 0;
+  int clipped = 0;
+  int overruns = 0;
+  int failures = 0;  ///< steps where the planner threw
+};
+
+struct Rollout {
+  Outcome outcome = Outcome::Failure;
+  std::string reason;     ///< the judge's words
+  Trajectory trajectory;  ///< formats.md; others = the real motion
+  std::vector<StepRecord> steps;
+  RolloutMetrics metrics;
+  double manoeuvre_over_at = -1.0;  ///< s; -1 if the ego never settled in the target lane
+};
+
+/// Runs one rollout of `planner` from `scene` (its fields override `config`).
+[[nodiscard]] Rollout simulate(const Scenario& scene, const planner::ClosedLoopPlanner& planner,
+                               const Config& config, const SimOptions& options = {});
+
+/// The judge, on a realised path: the labeller of the plans (NOTES.md) plus
+/// "aborted" for a path that never left its lane, and failure for any
+/// collision.
+[[nodiscard]] Outcome judge(const Trajectory& path, const Config& config, std::string& reason);
+
+/// The rollout as formats.md's trajectory JSON, with the outcome, the step
+/// records and the metrics added.
+[[nodiscard]] nlohmann::json rollout_to_json(const Rollout& rollout);
+/// "-" writes to standard output; a file is written atomically.
+void save_rollout(const Rollout& rollout, const std::string& path);
+
+}  // namespace lanechange::sim

@@ -1,0 +1,117 @@
+// The exact expert in closed loop: re-plan from the current state every
+// `replan_period` steps, warm-started from the last plan shifted by the
+// steps since it was made; follow the last feasible plan when a re-plan
+// fails, and the lane keeper when there is none.
+#include "planner/miqp_planner.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace lanechange::planner {
+
+namespace {
+
+using expert::ExpertResult;
+using expert::Iterate;
+using expert::PlanStatus;
+
+// The path shifted forward by `by` nodes and cut or padded (the last node
+// coasting along its heading) to `steps` steps; the modes likewise.
+Iterate shifted(const Iterate& path, int by, int steps, double dt) {
+  Iterate out;
+  const int last_state = static_cast<int>(path.states.size()) - 1;
+  const int last_control = static_cast<int>(path.controls.size()) - 1;
+  for (int k = 0; k <= steps; ++k) {
+    const int from = k + by;
+    expert::State z = path.states[std::min(from, last_state)];
+    const int beyond = std::max(0, from - last_state);
+    z[expert::kX] += beyond * dt * z[expert::kV] * std::cos(z[expert::kTheta]);
+    z[expert::kY] += beyond * dt * z[expert::kV] * std::sin(z[expert::kTheta]);
+    out.states.push_back(z);
+    if (k < steps) out.controls.push_back(path.controls[std::min(from, last_control)]);
+  }
+  return out;
+}
+
+std::vector<int> shifted(const std::vector<int>& modes, int by, int steps) {
+  std::vector<int> out(static_cast<std::size_t>(steps) + 1, -1);
+  if (modes.empty()) return out;
+  const int last = static_cast<int>(modes.size()) - 1;
+  for (int k = 1; k <= steps; ++k) out[k] = modes[std::min(k + by, last)];
+  return out;
+}
+
+}  // namespace
+
+Config closed_loop_expert(Config config) {
+  config.expert.monotone_lateral =
+      config.expert.monotone_lateral || config.closed_loop.monotone_lateral;
+  return config;
+}
+
+Scenario scene_now(const Observation& o, const Config& config) {
+  Scenario scene = *o.scene;
+  scene.ego = o.ego;
+  scene.leader = o.car(Car::Leader);
+  scene.follower = o.car(Car::Follower);
+  scene.target = o.car(Car::Target);
+  const double dt = o.scene->horizon / o.scene->steps;
+  if (config.closed_loop.horizon_mode == HorizonMode::Shrinking) {
+    const double left = std::max(config.closed_loop.min_horizon, o.scene->horizon - o.t);
+    scene.steps = std::max(2, static_cast<int>(std::lround(left / dt)));
+    scene.horizon = scene.steps * dt;
+  }
+  return scene;
+}
+
+MiqpSession::MiqpSession(const expert::ExpertPlanner& expert, const Config& config)
+    : expert_(expert), config_(config), keeper_(config) {}
+
+Decision MiqpSession::act(const Observation& o) {
+  const bool due = !plan_ || o.step - plan_step_ >= config_.closed_loop.replan_period;
+  std::string failure;
+  if (due) failure = replan(o);
+  if (plan_) {
+    const int offset = o.step - plan_step_;
+    if (offset < static_cast<int>(plan_->controls.size())) {
+      const expert::Control& u = plan_->controls[static_cast<std::size_t>(offset)];
+      Decision d{{u[expert::kA], u[expert::kOmega]}, ActStatus::Planned, ""};
+      if (!failure.empty()) d.reason = "re-plan failed (" + failure + "): following the last plan";
+      return d;
+    }
+  }
+  return fallback(o, failure.empty() ? "the last plan has run out" : failure);
+}
+
+std::string MiqpSession::replan(const Observation& o) {
+  const Scenario scene = scene_now(o, config_);
+  const double dt = scene.horizon / scene.steps;
+  Iterate guess;
+  std::vector<int> modes;
+  expert::PlanHints hints;
+  if (plan_) {
+    guess = shifted(*plan_, o.step - plan_step_, scene.steps, dt);
+    modes = shifted(modes_, o.step - plan_step_, scene.steps);
+    hints = {&guess, &modes};
+  }
+  const ExpertResult result =
+      expert_.plan(scene, {config_.closed_loop.step_budget_ms / 1000.0}, hints);
+  last_plan_ms_ = result.total_ms;
+  if (result.status != PlanStatus::Converged) {
+    return std::string(expert::to_string(result.status)) + ": " + result.reason;
+  }
+  plan_ = result.path;
+  modes_ = result.modes;
+  plan_step_ = o.step;
+  return "";
+}
+
+Decision MiqpSession::fallback(const Observation& o, const std::string& why) {
+  return {fallback_control(keeper_, o), ActStatus::Fallback, "no feasible plan: " + why};
+}
+
+std::unique_ptr<PlannerSession> MiqpPlanner::start(const Scenario& /*scene*/) const {
+  return std::make_unique<MiqpSession>(expert_, config_);
+}
+
+}  // namespace lanechange::planner

@@ -1,0 +1,53 @@
+#pragma once
+// The planners' internals, shared by the planners of src/planner/ (and the
+// hierarchical planner's take-over, which is this session).
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "lanechange/expert/planner.hpp"
+#include "lanechange/planner/planner.hpp"
+
+namespace lanechange::planner {
+
+/// The scene as it is now: the initial scene's fields with the current
+/// states of every car, and the horizon the config's mode asks for.
+[[nodiscard]] Scenario scene_now(const Observation& observation, const Config& config);
+
+class MiqpSession final : public PlannerSession {
+ public:
+  MiqpSession(const expert::ExpertPlanner& expert, const Config& config);
+  [[nodiscard]] Decision act(const Observation& observation) override;
+  /// Time of the last re-plan (ms), for benchmarks.
+  [[nodiscard]] double last_plan_ms() const { return last_plan_ms_; }
+
+ private:
+  /// Re-plans from the observation; returns why it failed ("" on success).
+  std::string replan(const Observation& observation);
+  [[nodiscard]] Decision fallback(const Observation& observation, const std::string& why);
+
+  const expert::ExpertPlanner& expert_;
+  const Config& config_;
+  LaneKeeper keeper_;
+  std::optional<expert::Iterate> plan_;
+  std::vector<int> modes_;
+  int plan_step_ = 0;
+  double last_plan_ms_ = 0.0;
+};
+
+/// The expert's config in closed loop (closed_loop.monotone_lateral).
+[[nodiscard]] Config closed_loop_expert(Config config);
+
+class MiqpPlanner final : public ClosedLoopPlanner {
+ public:
+  MiqpPlanner(Config config, std::shared_ptr<const expert::LaneChangeSolver> solver)
+      : config_(closed_loop_expert(std::move(config))), expert_(config_, std::move(solver)) {}
+  [[nodiscard]] std::string_view name() const override { return "miqp"; }
+  [[nodiscard]] std::unique_ptr<PlannerSession> start(const Scenario& scene) const override;
+
+ private:
+  Config config_;
+  expert::ExpertPlanner expert_;
+};
+
+}  // namespace lanechange::planner

@@ -1,0 +1,51 @@
+#include <algorithm>
+
+#include "lanechange/error.hpp"
+#include "planner/miqp_planner.hpp"
+
+namespace lanechange::planner {
+
+namespace {
+
+// Never changes lanes: the lane keeper behind the leader. The floor every
+// planner falls back to, and a baseline of its own ("what if we stay").
+class KeepLaneSession final : public PlannerSession {
+ public:
+  explicit KeepLaneSession(const Config& config) : keeper_(config) {}
+  [[nodiscard]] Decision act(const Observation& o) override {
+    return {keeper_.control(o.ego, 0.0, car_ahead(o, false)), ActStatus::Fallback,
+            "this planner never changes lanes"};
+  }
+
+ private:
+  LaneKeeper keeper_;
+};
+
+class KeepLanePlanner final : public ClosedLoopPlanner {
+ public:
+  explicit KeepLanePlanner(Config config) : config_(std::move(config)) {}
+  [[nodiscard]] std::string_view name() const override { return "keep-lane"; }
+  [[nodiscard]] std::unique_ptr<PlannerSession> start(const Scenario& /*scene*/) const override {
+    return std::make_unique<KeepLaneSession>(config_);
+  }
+
+ private:
+  Config config_;
+};
+
+}  // namespace
+
+std::vector<std::string> planner_names() { return {"miqp", "keep-lane"}; }
+
+std::shared_ptr<const ClosedLoopPlanner> make_planner(std::string_view name, const Config& config) {
+  if (name == "miqp") {
+    return std::make_shared<MiqpPlanner>(config, std::make_shared<expert::FastLaneChangeSolver>());
+  }
+  if (name == "keep-lane") return std::make_shared<KeepLanePlanner>(config);
+  std::string known;
+  for (const auto& n : planner_names()) known += (known.empty() ? "" : ", ") + n;
+  throw InputError("--planner",
+                   "unknown planner \"" + std::string(name) + "\" (known: " + known + ")");
+}
+
+}  // namespace lanechange::planner

@@ -1,0 +1,122 @@
+// One judge for every planner's rollout, and the measures evaluate tabulates.
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "lanechange/checks.hpp"
+#include "lanechange/error.hpp"
+#include "lanechange/sim/simulator.hpp"
+#include "lanechange/traffic.hpp"
+#include "sim/metrics.hpp"
+
+namespace lanechange::sim {
+
+std::string_view to_string(Outcome outcome) {
+  switch (outcome) {
+    case Outcome::WellPosed: return "well_posed";
+    case Outcome::IllPosed: return "ill_posed";
+    case Outcome::Failure: return "failure";
+    case Outcome::Aborted: return "aborted";
+  }
+  return "?";
+}
+
+Outcome outcome_from_string(std::string_view name) {
+  for (const Outcome o :
+       {Outcome::WellPosed, Outcome::IllPosed, Outcome::Failure, Outcome::Aborted}) {
+    if (to_string(o) == name) return o;
+  }
+  throw InputError("outcome", "unknown outcome \"" + std::string(name) + "\"");
+}
+
+Outcome judge(const Trajectory& path, const Config& config, std::string& reason) {
+  const std::vector<double> y = path.ys();
+  const Labelled l = label_trajectory(y, path.ego.back().theta, path.lane_width, config.labels);
+  reason = l.reason;
+  if (path.collision) return Outcome::Failure;
+  if (l.label == Label::WellPosed) return Outcome::WellPosed;
+  if (l.label == Label::IllPosed) return Outcome::IllPosed;
+  // Not in the target lane at the end: aborted if the body never touched
+  // the line and the ego ends near its own lane's centre.
+  const double half_width = config.vehicle.width / 2.0;
+  const double highest = *std::max_element(y.begin(), y.end());
+  if (highest + half_width <= path.lane_width / 2.0 && std::abs(y.back()) <= config.labels.reach) {
+    reason = "stayed in its lane";
+    return Outcome::Aborted;
+  }
+  return Outcome::Failure;
+}
+
+namespace {
+
+// Gap and time-to-collision to the cars in the lanes the ego's body touches.
+void traffic_measures(const Trajectory& t, const Scenario& scene, RolloutMetrics& m) {
+  m.min_gap = std::numeric_limits<double>::infinity();
+  m.min_ttc = std::numeric_limits<double>::infinity();
+  for (int k = 0; k < t.nodes(); ++k) {
+    const EgoState& e = t.ego[static_cast<std::size_t>(k)];
+    const double ego_speed = e.v * std::cos(e.theta);
+    for (const Car c : kAllCars) {
+      if (!body_in_lane(e.y, scene.vehicle.width, scene.lane_center(c), scene.lane_width)) {
+        continue;
+      }
+      const CarTrack& track = t.others.car(c);
+      const double dx = track.x[static_cast<std::size_t>(k)] - e.x;
+      const double gap = std::abs(dx) - scene.vehicle.length;
+      m.min_gap = std::min(m.min_gap, gap);
+      const double car_speed = track.v[static_cast<std::size_t>(k)];
+      const double closing = dx > 0 ? ego_speed - car_speed : car_speed - ego_speed;
+      if (closing > 0) m.min_ttc = std::min(m.min_ttc, std::max(0.0, gap) / closing);
+    }
+  }
+}
+
+double median(std::vector<double> v) {
+  if (v.empty()) return 0.0;
+  const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
+  std::nth_element(v.begin(), mid, v.end());
+  return *mid;
+}
+
+}  // namespace
+
+namespace detail {
+
+RolloutMetrics measure(const Rollout& rollout, const Scenario& scene, const Config& config) {
+  RolloutMetrics m;
+  const Trajectory& t = rollout.trajectory;
+  for (int k = 0; k < t.nodes(); ++k) {
+    if (std::abs(t.ego[k].y - scene.lane_width) <= config.labels.reach) {
+      m.time_to_target_lane = t.t[k];
+      break;
+    }
+  }
+  traffic_measures(t, scene, m);
+  double jerk_sq = 0.0;
+  const auto applied = static_cast<int>(rollout.steps.size());
+  for (int k = 0; k < applied; ++k) {
+    const EgoControl& u = t.controls[static_cast<std::size_t>(k)];
+    m.max_abs_accel = std::max(m.max_abs_accel, std::abs(u.a));
+    m.max_abs_omega = std::max(m.max_abs_omega, std::abs(u.omega));
+    const double before = k == 0 ? scene.ego.a : t.controls[static_cast<std::size_t>(k - 1)].a;
+    jerk_sq += std::pow((u.a - before) / t.dt, 2);
+  }
+  m.rms_jerk = applied > 0 ? std::sqrt(jerk_sq / applied) : 0.0;
+  std::vector<double> ms;
+  for (const StepRecord& s : rollout.steps) {
+    if (s.lane_keeping) continue;
+    ms.push_back(s.compute_ms);
+    m.max_step_ms = std::max(m.max_step_ms, s.compute_ms);
+    m.takeovers += s.status == planner::ActStatus::TookOver ? 1 : 0;
+    m.fallbacks += s.status == planner::ActStatus::Fallback ? 1 : 0;
+    m.failures += s.status == planner::ActStatus::Failed && !s.overrun ? 1 : 0;
+    m.overruns += s.overrun ? 1 : 0;
+  }
+  for (const StepRecord& s : rollout.steps) m.clipped += s.clipped ? 1 : 0;
+  m.median_step_ms = median(ms);
+  return m;
+}
+
+}  // namespace detail
+
+}  // namespace lanechange::sim

@@ -1,0 +1,210 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <stdexcept>
+#include <thread>
+
+#include "lanechange/checks.hpp"
+#include "lanechange/ego.hpp"
+#include "lanechange/planner/planner.hpp"
+#include "lanechange/sampler.hpp"
+#include "lanechange/sim/simulator.hpp"
+#include "lanechange/traffic.hpp"
+#include "test_helpers.hpp"
+
+namespace lanechange {
+namespace {
+
+using planner::ActStatus;
+using planner::Decision;
+using planner::Observation;
+using sim::Outcome;
+
+Scenario open_road(Behavior behavior = Behavior::ConstantSpeed) {
+  Scenario s = default_scenario(Config{});
+  s.behavior = behavior;
+  s.ego = {0.0, 0.0, 8.0, 0.0, 0.0};
+  s.leader = {40.0, 8.0, 0.0};
+  s.follower = {-60.0, 8.0, 0.0};
+  s.target = {70.0, 8.0, 0.0};
+  validate_scenario(s);
+  return s;
+}
+
+// The target lane packed around the ego: no gap at all.
+Scenario no_gap() {
+  Scenario s = open_road();
+  s.follower = {-2.0, 8.0, 0.0};
+  s.target = {3.0, 8.0, 0.0};
+  validate_scenario(s);
+  return s;
+}
+
+// A planner given as a function of the observation (tests only).
+class ScriptedPlanner final : public planner::ClosedLoopPlanner {
+ public:
+  using Script = std::function<Decision(const Observation&)>;
+  explicit ScriptedPlanner(Script script) : script_(std::move(script)) {}
+  [[nodiscard]] std::string_view name() const override { return "scripted"; }
+  [[nodiscard]] std::unique_ptr<planner::PlannerSession> start(const Scenario&) const override {
+    class Session final : public planner::PlannerSession {
+     public:
+      explicit Session(const Script& s) : script_(s) {}
+      Decision act(const Observation& o) override { return script_(o); }
+
+     private:
+      const Script& script_;
+    };
+    return std::make_unique<Session>(script_);
+  }
+
+ private:
+  Script script_;
+};
+
+// The checks every rollout must pass: the ego follows its controls through
+// the exact model, the cars follow their behavior (reacting to the real ego),
+// the collision flag is what the boxes say, and the limits hold.
+void expect_consistent(const sim::Rollout& r, const Scenario& s) {
+  const Trajectory& t = r.trajectory;
+  ASSERT_EQ(t.nodes(), static_cast<int>(r.steps.size()) + 1);
+  TrafficModel traffic(s, Config{});
+  EgoState ego = s.ego;
+  for (int k = 0; k + 1 < t.nodes(); ++k) {
+    const EgoControl u = t.controls[k];
+    EXPECT_TRUE(s.limits.a.contains(u.a)) << "step " << k;
+    EXPECT_TRUE(s.limits.omega.contains(u.omega)) << "step " << k;
+    traffic.step(t.dt, {ego.x, ego.y, ego.v});
+    ego = step_exact(ego, u, t.dt);
+    EXPECT_NEAR(t.ego[k + 1].x, ego.x, 1e-9) << "step " << k;
+    EXPECT_NEAR(t.ego[k + 1].y, ego.y, 1e-9) << "step " << k;
+    EXPECT_GE(t.ego[k + 1].v, s.limits.v.lo - 1e-9);
+    EXPECT_LE(t.ego[k + 1].v, s.limits.v.hi + 1e-9);
+    for (const Car c : kAllCars) {
+      EXPECT_NEAR(t.others.car(c).x[k + 1], traffic.car(c).x, 1e-9) << to_string(c) << " " << k;
+    }
+  }
+  EXPECT_EQ(t.collision, first_collision(t.ego, t.others, s).has_value());
+  if (t.collision) {
+    EXPECT_EQ(r.outcome, Outcome::Failure);
+  }
+}
+
+TEST(ClosedLoop, ExpertChangesLanesIntoAWideOpenGap) {
+  const Config config;
+  const Scenario s = open_road();
+  const auto miqp = planner::make_planner("miqp", config);
+  const sim::Rollout r = sim::simulate(s, *miqp, config);
+  expect_consistent(r, s);
+  EXPECT_EQ(r.outcome, Outcome::WellPosed) << r.reason;
+  EXPECT_FALSE(r.trajectory.collision);
+  EXPECT_GT(r.manoeuvre_over_at, 0.0);
+  EXPECT_NEAR(r.trajectory.ego.back().y, s.lane_width, config.labels.reach);
+}
+
+TEST(ClosedLoop, NoGapIsAbortedWithoutCollision) {
+  const Config config;
+  const Scenario s = no_gap();
+  for (const char* name : {"miqp", "keep-lane"}) {
+    const auto p = planner::make_planner(name, config);
+    const sim::Rollout r = sim::simulate(s, *p, config);
+    expect_consistent(r, s);
+    EXPECT_EQ(r.outcome, Outcome::Aborted) << name << ": " << r.reason;
+    EXPECT_FALSE(r.trajectory.collision) << name;
+    EXPECT_GT(r.metrics.fallbacks, 0) << name;
+  }
+}
+
+TEST(ClosedLoop, SampledRolloutsAreConsistent) {
+  const Config config;
+  const ScenarioSampler sampler(config, 5);
+  const auto miqp = planner::make_planner("miqp", config);
+  for (std::uint64_t i = 0; i < 4; ++i) {
+    const Scenario s = sampler.sample(i);
+    const sim::Rollout r = sim::simulate(s, *miqp, config);
+    SCOPED_TRACE("scenario " + std::to_string(i));
+    expect_consistent(r, s);
+  }
+}
+
+TEST(ClosedLoop, IdmFollowerBrakesForAnEgoThatCutsIn) {
+  // The ego steers into the target lane right in front of the follower.
+  Scenario s = open_road(Behavior::Idm);
+  s.follower = {-12.0, 9.0, 0.0};
+  s.target = {60.0, 9.0, 0.0};
+  const Config config;
+  const ScriptedPlanner cut_in([](const Observation& o) {
+    const double wanted = o.ego.y < 3.0 ? 0.2 : 0.0;
+    return Decision{{0.0, 2.0 * (wanted - o.ego.theta)}, ActStatus::Planned, ""};
+  });
+  const sim::Rollout r = sim::simulate(s, cut_in, config, {4.0});
+  expect_consistent(r, s);
+  const CarTrack& follower = r.trajectory.others.car(Car::Follower);
+  double hardest = 0.0;
+  for (double a : follower.a) hardest = std::min(hardest, a);
+  EXPECT_LT(hardest, -1.0);  // IDM brakes hard for a car cutting in 7 m ahead
+  // With the ego staying in its lane, the follower never brakes.
+  const ScriptedPlanner stay([](const Observation&) { return Decision{}; });
+  const sim::Rollout alone = sim::simulate(s, stay, config, {4.0});
+  for (double a : alone.trajectory.others.car(Car::Follower).a) EXPECT_GE(a, -1e-9);
+}
+
+TEST(ClosedLoop, AThrowingOrSlowPlannerIsRecordedAndTheFallbackActs) {
+  Config config;
+  config.closed_loop.step_budget_ms = 5.0;
+  const Scenario s = open_road();
+  const ScriptedPlanner bad([](const Observation& o) -> Decision {
+    if (o.step == 3) throw std::runtime_error("boom");
+    if (o.step == 5) std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    return {{0.0, 0.4}, ActStatus::Planned, ""};
+  });
+  const sim::Rollout r = sim::simulate(s, bad, config, {1.0});
+  expect_consistent(r, s);
+  EXPECT_EQ(r.steps[3].status, ActStatus::Failed);
+  EXPECT_NE(r.steps[3].reason.find("boom"), std::string::npos);
+  EXPECT_TRUE(r.steps[5].overrun);
+  EXPECT_EQ(r.metrics.overruns, 1);
+  EXPECT_EQ(r.metrics.failures, 1);
+  // The fallback steers back to the lane centre where the planner steered out.
+  EXPECT_LT(r.trajectory.controls[3].omega, 0.0);
+  // Out-of-limit wishes are clipped and recorded.
+  EXPECT_TRUE(r.steps[0].clipped);  // 0.4 rad/s is above the 15 deg/s limit
+  EXPECT_NEAR(r.trajectory.controls[0].omega, s.limits.omega.hi, 1e-12);
+}
+
+TEST(ClosedLoop, JudgeTellsAbortFromFailure) {
+  Config config;
+  Trajectory t;
+  t.lane_width = 3.75;
+  t.dt = 0.1;
+  for (int k = 0; k < 20; ++k) {
+    t.t.push_back(k * 0.1);
+    t.ego.push_back({k * 1.0, 0.05 * std::sin(k * 0.3), 8.0, 0.0, 0.0});
+  }
+  std::string reason;
+  EXPECT_EQ(sim::judge(t, config, reason), Outcome::Aborted);
+  t.ego[10].y = 1.2;  // the body crossed the line and came back
+  EXPECT_EQ(sim::judge(t, config, reason), Outcome::Failure);
+  for (int k = 10; k < 20; ++k) t.ego[k].y = 3.75;
+  EXPECT_EQ(sim::judge(t, config, reason), Outcome::WellPosed);
+  t.collision = true;
+  EXPECT_EQ(sim::judge(t, config, reason), Outcome::Failure);
+}
+
+TEST(ClosedLoop, SimulateCliWritesARolloutAndRefusesBadInput) {
+  testing::TempDir dir;
+  testing::write_text(dir.file("s.json"), testing::example_scenario_json().dump());
+  const auto r = testing::run_cli("simulate --planner keep-lane --scenario " + dir.file("s.json") +
+                                  " --out " + dir.file("r.json"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const auto rollout = nlohmann::json::parse(testing::read_text(dir.file("r.json")));
+  EXPECT_EQ(rollout["planner"], "keep-lane");
+  EXPECT_EQ(rollout["outcome"], "aborted");
+  EXPECT_EQ(rollout["t"].size(), rollout["ego"]["x"].size());
+  EXPECT_EQ(
+      testing::run_cli("simulate --planner nobody --scenario " + dir.file("s.json")).exit_code, 2);
+  EXPECT_EQ(testing::run_cli("simulate --scenario " + dir.file("absent.json")).exit_code, 2);
+}
+
+}  // namespace
+}  // namespace lanechange
