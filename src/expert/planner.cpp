@@ -232,16 +232,21 @@ Iterate rollout(const Scenario& scenario, const Iterate& path, double dt) {
   return out;
 }
 
-// Rounds within a box around the last solution, where the plain rounds failed.
-// A round whose step stays strictly inside the box and within the convergence
-// tolerance is a fixed point of the plain rounds' map restricted to the box:
-// its path is the best within the box about its own linearization. A step
-// that reverses the last one shrinks the box; an empty box grows it again.
+// Rounds within a box around the rollout of the last solution, where the plain
+// rounds failed. A round converges by the plain test: its solution is within
+// the tolerance of the path it was linearized about. With the box slack, that
+// is a fixed point of the plain rounds restricted to the box; once the box is
+// smaller than the tolerance the test holds by construction, and the plan is
+// a path within the tolerance of a trajectory of the nonlinear model, the best
+// within the box about it (docs/expert.md counts both kinds). A step that
+// reverses the last one, or fails to contract, shrinks the box; an empty box
+// grows it again.
 void trust_region_rounds(const RoundContext& c, ExpertResult& result, Iterate previous) {
   const ExpertSettings& e = c.config.expert;
   const int plain = result.iterations();
   Iterate point = rollout(c.scenario, result.path, c.dt);
   double radius = e.trust_radius;
+  double last_change = result.rounds.back().max_change;
   for (int extra = 1; extra <= e.trust_rounds; ++extra) {
     const RoundSolution round_solution = solve_round(c, point, radius, result);
     const LaneChangeSolution& solution = round_solution.solution;
@@ -264,7 +269,12 @@ void trust_region_rounds(const RoundContext& c, ExpertResult& result, Iterate pr
       result.reason.clear();
       return;
     }
-    if (reverses(solution.path, point, previous)) radius *= e.trust_shrink;
+    // A step inside the box that is no shorter than the last one does not
+    // contract (rounds that drift, as under IDM, where the follower answers
+    // each new path): a smaller box makes it.
+    const bool stalls = report.max_change < radius && report.max_change >= last_change;
+    if (stalls || reverses(solution.path, point, previous)) radius *= e.trust_shrink;
+    last_change = report.max_change;
     previous = std::move(point);
     point = rollout(c.scenario, solution.path, c.dt);
   }
