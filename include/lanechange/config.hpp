@@ -109,7 +109,7 @@ struct ExpertSettings {
   /// so every plan that converges without it keeps its rounds and its answer.
   Globalisation globalisation = Globalisation::TrustRegion;
   /// m: the first box, on x and y at every node, around the linearization point.
-  double trust_radius = 1.0;
+  double trust_radius = 0.5;
   /// The box shrinks by this factor when a round's step reverses the last one.
   double trust_shrink = 0.5;
   int trust_rounds = 10;                ///< rounds allowed after the plain ones

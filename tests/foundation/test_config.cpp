@@ -24,16 +24,18 @@ TEST(Config, SaveAndLoadRoundTrip) {
 
 TEST(Config, GlobalisationRoundTripsThroughJson) {
   const Config c = config_from_json(nlohmann::json::parse(
-      R"({"expert": {"globalisation": "off", "trust_radius": 0.5, "trust_shrink": 0.25,
+      R"({"expert": {"globalisation": "off", "trust_radius": 0.75, "trust_shrink": 0.25,
                      "trust_rounds": 4}})"));
   EXPECT_EQ(c.expert.globalisation, Globalisation::Off);
-  EXPECT_DOUBLE_EQ(c.expert.trust_radius, 0.5);
+  EXPECT_DOUBLE_EQ(c.expert.trust_radius, 0.75);
   EXPECT_DOUBLE_EQ(c.expert.trust_shrink, 0.25);
   EXPECT_EQ(c.expert.trust_rounds, 4);
   const nlohmann::json written = c;
   EXPECT_EQ(written["expert"]["globalisation"], "off");
   EXPECT_EQ(nlohmann::json(config_from_json(written)), written);
   EXPECT_EQ(Config{}.expert.globalisation, Globalisation::TrustRegion);
+  // The authors' code has no globalisation: its preset keeps their verdicts.
+  EXPECT_EQ(make_preset("authors").expert.globalisation, Globalisation::Off);
 }
 
 TEST(Config, PartialFileStartsFromItsPreset) {
