@@ -319,9 +319,10 @@ void expect_trust_region_converges(LaneRule rule, const Scenario& s) {
   }
   EXPECT_TRUE(std::isfinite(global.rounds.back().trust_radius));
   EXPECT_LE(global.rounds.back().max_change, Config{}.expert.convergence_tolerance);
-  // Its answer is no worse than a percent above either path of the cycle.
+  // Its answer costs little more than the paths of the cycle (on 600 sampled
+  // scenarios: a median 2% and at most 8% above the better, footprint rule).
   EXPECT_LT(global.objective,
-            1.01 * std::max(plain.rounds.end()[-1].objective, plain.rounds.end()[-2].objective));
+            1.05 * std::min(plain.rounds.end()[-1].objective, plain.rounds.end()[-2].objective));
   const Config config = config_with(rule, Globalisation::TrustRegion);
   const ExpertPlanner planner(config, std::make_shared<FastLaneChangeSolver>());
   const Trajectory t = planner.to_trajectory(global, s);
@@ -334,7 +335,7 @@ TEST(Planner, TrustRegionConvergesWhereTheRoundsCycle) {
 }
 
 // A sampled scenario (seed 11, index 356) whose footprint rounds alternate
-// between two paths 0.18 m apart.
+// between two paths 0.72 m apart.
 Scenario footprint_cycling_scenario() {
   return scenario_from_json(nlohmann::json::parse(R"({
     "format": "lanechange.scenario/1", "lane_width": 3.75, "behavior": "constant_speed",
