@@ -84,13 +84,16 @@ struct RoundContext {
 };
 
 // Keeps the round's solution within `radius` of the linearization point in x
-// and y at every node: the trust region. y stays inside its own bounds, which
-// the point (a solution) meets, so the box is never empty.
+// and y at every node: the trust region. Where the point lies farther than
+// that outside y's own bounds (a rollout may overshoot them by its defect),
+// the box shrinks to the nearest bound rather than become empty.
 void restrict_to_box(LaneChangeQp& qp, const Iterate& point, double radius) {
   for (int k = 1; k <= qp.steps; ++k) {
     for (int c : {kX, kY}) {
-      qp.state_lower[k][c] = std::max(qp.state_lower[k][c], point.states[k][c] - radius);
-      qp.state_upper[k][c] = std::min(qp.state_upper[k][c], point.states[k][c] + radius);
+      const double lo = qp.state_lower[k][c];
+      const double hi = qp.state_upper[k][c];
+      qp.state_lower[k][c] = std::min(std::max(lo, point.states[k][c] - radius), hi);
+      qp.state_upper[k][c] = std::max(std::min(hi, point.states[k][c] + radius), lo);
     }
   }
 }
