@@ -98,14 +98,14 @@ void restrict_to_box(LaneChangeQp& qp, const Iterate& point, double radius) {
   }
 }
 
-// One round: the cars re-predicted along `point` when they react to the ego,
-// the dynamics linearized about it, the MIQP solved (within `radius` of the
-// point when finite). Updates the prediction the result reports.
 struct RoundSolution {
   LaneChangeSolution solution;
   std::vector<std::optional<LaneOccupancy>> occupancy;  ///< of the solution's modes
 };
 
+// One round: the cars re-predicted along `point` when they react to the ego,
+// the dynamics linearized about it, the MIQP solved (within `radius` of the
+// point when finite). Updates the prediction the result reports.
 RoundSolution solve_round(const RoundContext& c, const Iterate& point, double radius,
                           ExpertResult& result) {
   if (c.scenario.behavior == Behavior::Idm) {
