@@ -77,6 +77,13 @@ enum class TrafficIntegration {
   Euler,      ///< v += a dt, then x += v dt (semi-implicit; the authors' prediction)
 };
 
+/// What the expert does where its plain rounds fail (docs/expert.md, "Rounds that never
+/// converge").
+enum class Globalisation {
+  Off,          ///< a cycle or the round limit ends the plan (a failure), as before
+  TrustRegion,  ///< then more rounds, each within a shrinking box of the last (trust_*)
+};
+
 struct ExpertSettings {
   double horizon = 5.0;            ///< t_f, s
   int steps = 50;                  ///< N
@@ -98,6 +105,14 @@ struct ExpertSettings {
   /// tolerance, has locked into a 2-cycle that no later round leaves; the plan
   /// stops there (status cycling, a failure like the round limit). 0: off.
   double cycle_tolerance = 1e-3;
+  /// Entered only where the plain rounds end in a cycle or at the round limit,
+  /// so every plan that converges without it keeps its rounds and its answer.
+  Globalisation globalisation = Globalisation::TrustRegion;
+  /// m: the first box, on x and y at every node, around the linearization point.
+  double trust_radius = 0.5;
+  /// The box shrinks by this factor when a round's step reverses the last one.
+  double trust_shrink = 0.5;
+  int trust_rounds = 10;                ///< rounds allowed after the plain ones
   double big_m = 1000.0;                ///< m; must exceed any distance a lane constraint relaxes
   bool fix_terminal_lateral = true;     ///< y(t_f) = w as a constraint (authors' code)
   bool constrain_initial_node = false;  ///< apply the lane rules at t = 0 too (authors' code)

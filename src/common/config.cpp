@@ -54,6 +54,10 @@ void Config::validate() const {
   require(expert.max_iterations >= 1, "expert.max_iterations", "must be at least 1");
   require(expert.convergence_tolerance > 0, "expert.convergence_tolerance", "must be positive");
   require(expert.cycle_tolerance >= 0, "expert.cycle_tolerance", "must not be negative");
+  require(expert.trust_radius > 0, "expert.trust_radius", "must be positive");
+  require(expert.trust_shrink > 0 && expert.trust_shrink < 1, "expert.trust_shrink",
+          "must be in (0, 1)");
+  require(expert.trust_rounds >= 1, "expert.trust_rounds", "must be at least 1");
   require(expert.big_m > 0, "expert.big_m", "must be positive");
   require(expert.prediction_lead_steps >= 0 && expert.prediction_lead_steps <= 10,
           "expert.prediction_lead_steps", "must be in [0, 10]");
@@ -86,6 +90,7 @@ Config authors_preset() {
   c.expert.prediction_lead_steps = 1;
   c.expert.warm_start = WarmStart::Authors;
   c.expert.aim_behind_target = false;
+  c.expert.globalisation = Globalisation::Off;  // more than 10 rounds is a failure there
   c.traffic_integration = TrafficIntegration::Euler;
   c.sampler.target_speed = {20.0 / 3.6, 40.0 / 3.6};
   return c;

@@ -50,6 +50,10 @@ void visit_fields(V& v, S& s) requires std::same_as<std::remove_const_t<S>, Clos
   v("lookahead", s.lookahead);
 }
 
+inline constexpr std::array<detail::EnumName<Globalisation>, 2> enum_names(Globalisation) {
+  return {{{Globalisation::Off, "off"}, {Globalisation::TrustRegion, "trust_region"}}};
+}
+
 template <class V, class S>
 void visit_fields(V& v, S& s) requires std::same_as<std::remove_const_t<S>, VehicleSize> {
   v("length", s.length);
@@ -101,6 +105,10 @@ void visit_fields(V& v, S& s) requires std::same_as<std::remove_const_t<S>, Expe
   v("max_iterations", s.max_iterations);
   v("convergence_tolerance", s.convergence_tolerance);
   v("cycle_tolerance", s.cycle_tolerance);
+  v("globalisation", s.globalisation);
+  v("trust_radius", s.trust_radius);
+  v("trust_shrink", s.trust_shrink);
+  v("trust_rounds", s.trust_rounds);
   v("big_m", s.big_m);
   v("fix_terminal_lateral", s.fix_terminal_lateral);
   v("constrain_initial_node", s.constrain_initial_node);

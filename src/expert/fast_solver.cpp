@@ -142,6 +142,10 @@ bool ramp_row(const LaneChangeQp& qp, int k, HalfSpace& out) {
   const LaneMode& high = modes.back();
   const auto [low_lo, low_hi] = lateral_range(low, ylo, yhi);
   const auto [high_lo, high_hi] = lateral_range(high, ylo, yhi);
+  // The corners exist only where both modes reach into the node's y bounds; a
+  // narrow box (the expert's trust region) can leave one out, and a line
+  // anchored on it would cut off the other.
+  if (low_lo > low_hi || high_lo > high_hi) return false;
   for (const HalfSpace& h : low.rows) {
     if (h.g[kX] != 1.0 || h.g[kY] != 0.0) continue;
     const double u_low = limit_along(low, h.g);
@@ -163,8 +167,6 @@ bool ramp_row(const LaneChangeQp& qp, int k, HalfSpace& out) {
     out.g = h.g;
     out.g[kY] -= slope;
     out.upper = anchor_u - slope * anchor_y;
-    (void)low_lo;
-    (void)high_hi;
     return true;
   }
   return false;

@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <optional>
 
 #include "lanechange/ego.hpp"
 
@@ -70,75 +71,114 @@ std::vector<std::optional<LaneOccupancy>> occupancy_of(const LaneChangeQp& qp,
   return out;
 }
 
-}  // namespace
+// What every round of one plan shares.
+struct RoundContext {
+  const Scenario& scenario;
+  const Config& config;
+  const LaneChangeSolver& solver;
+  LaneChangeWorkspace* workspace;
+  Clock::time_point start;
+  double time_limit_s;
+  int predicted_steps;
+  double dt;
+  const std::vector<int>* first_modes;  ///< lane modes to try first in round 1 (or none)
+};
 
-ExpertResult ExpertPlanner::plan(const Scenario& scenario, const PlanLimits& limits,
-                                 const PlanHints& hints) const {
-  const auto start = Clock::now();
-  const Config config = effective_config(config_, scenario);
-  const int steps = scenario.steps;
-  const double dt = scenario.horizon / steps;
-  const int predicted_steps = steps + config.expert.prediction_lead_steps;
-  ExpertResult result;
-  result.prediction = predict_traffic(scenario, config, predicted_steps, dt);
-  const auto nodes = static_cast<std::size_t>(steps) + 1;
-  const bool path_fits = hints.path != nullptr && hints.path->states.size() == nodes &&
-                         hints.path->controls.size() == nodes - 1;
-  Iterate point = path_fits ? *hints.path : warm_start(scenario, config, result.prediction);
-  const bool modes_fit = hints.modes != nullptr && hints.modes->size() == nodes;
-  const bool reactive = scenario.behavior == Behavior::Idm;
-  const auto workspace = solver_->make_workspace();
-  std::vector<int> mode_hint;
+// Keeps the round's solution within `radius` of the linearization point in x
+// and y at every node: the trust region. Where the point lies farther than
+// that outside y's own bounds (a rollout may overshoot them by its defect),
+// the box shrinks to the nearest bound rather than become empty.
+void restrict_to_box(LaneChangeQp& qp, const Iterate& point, double radius) {
+  for (int k = 1; k <= qp.steps; ++k) {
+    for (int c : {kX, kY}) {
+      const double lo = qp.state_lower[k][c];
+      const double hi = qp.state_upper[k][c];
+      qp.state_lower[k][c] = std::min(std::max(lo, point.states[k][c] - radius), hi);
+      qp.state_upper[k][c] = std::max(std::min(hi, point.states[k][c] + radius), lo);
+    }
+  }
+}
+
+struct RoundSolution {
+  LaneChangeSolution solution;
+  std::vector<std::optional<LaneOccupancy>> occupancy;  ///< of the solution's modes
+};
+
+// One round: the cars re-predicted along `point` when they react to the ego,
+// the dynamics linearized about it, the MIQP solved (within `radius` of the
+// point when finite). Updates the prediction the result reports.
+RoundSolution solve_round(const RoundContext& c, const Iterate& point, double radius,
+                          ExpertResult& result) {
+  if (c.scenario.behavior == Behavior::Idm) {
+    const auto ego_path = footprint_of(point);
+    result.prediction = predict_traffic(c.scenario, c.config, c.predicted_steps, c.dt, &ego_path);
+  }
+  LaneChangeQp qp = build_lane_change_qp(c.scenario, c.config, point, result.prediction);
+  if (std::isfinite(radius)) restrict_to_box(qp, point, radius);
+  MiqpSettings settings;
+  settings.time_limit_s = std::max(0.001, c.time_limit_s - elapsed_ms(c.start) / 1000.0);
+  // The previous round's lane modes (the warm start's, first) are a good
+  // first guess; the back-end proves or improves on them.
+  std::vector<int> mode_hint = result.modes;
+  if (mode_hint.empty() && c.first_modes != nullptr) mode_hint = *c.first_modes;
+  if (mode_hint.empty()) {
+    mode_hint.assign(qp.steps + 1, -1);
+    for (int k = 0; k <= qp.steps; ++k) {
+      if (!qp.node_modes[k].empty()) mode_hint[k] = qp.best_mode(point, k);
+    }
+  }
+  RoundSolution out{c.solver.solve(qp, settings, {c.workspace, &mode_hint, &point.controls}), {}};
+  out.occupancy = occupancy_of(qp, out.solution.modes);
+  return out;
+}
+
+RoundReport report_of(const LaneChangeSolution& s) {
+  return {s.status, s.objective, kInfinity, s.nodes, s.qp_iterations, s.incumbent_qps, s.solve_ms};
+}
+
+bool solved(const LaneChangeSolution& s) {
+  return s.status == MiqpStatus::Optimal && s.has_solution();
+}
+
+void fail_round(ExpertResult& result, const LaneChangeSolution& solution) {
+  result.status = status_of_failed_round(solution.status);
+  result.reason = "round " + std::to_string(result.iterations()) + ": " +
+                  std::string(lanechange::expert::to_string(solution.status)) +
+                  (solution.message.empty() ? "" : " (" + solution.message + ")");
+}
+
+void adopt(ExpertResult& result, const RoundSolution& round) {
+  result.path = round.solution.path;
+  result.modes = round.solution.modes;
+  result.occupancy = round.occupancy;
+  result.objective = round.solution.objective;
+}
+
+// The paper's successive linearization. Returns with a final status, or with
+// Cycling or IterationLimit and `previous` holding the linearization point of
+// the last round (the trust region starts from there).
+void plain_rounds(const RoundContext& c, Iterate point, ExpertResult& result, Iterate& previous) {
+  const ExpertSettings& e = c.config.expert;
   Iterate two_back;  // the solution of the round before the last
-  for (int round = 1; round <= config.expert.max_iterations; ++round) {
-    if (reactive) {
-      const auto ego_path = footprint_of(point);
-      result.prediction = predict_traffic(scenario, config, predicted_steps, dt, &ego_path);
-    }
-    const LaneChangeQp qp = build_lane_change_qp(scenario, config, point, result.prediction);
-    MiqpSettings settings;
-    settings.time_limit_s = std::max(0.001, limits.time_limit_s - elapsed_ms(start) / 1000.0);
-    // The previous round's lane modes (the warm start's, first) are a good
-    // first guess; the back-end proves or improves on them.
-    if (result.modes.empty() && modes_fit) {
-      mode_hint = *hints.modes;
-    } else if (result.modes.empty()) {
-      mode_hint.assign(steps + 1, -1);
-      for (int k = 0; k <= steps; ++k) {
-        if (!qp.node_modes[k].empty()) mode_hint[k] = qp.best_mode(point, k);
-      }
-    } else {
-      mode_hint = result.modes;
-    }
-    const LaneChangeSolution solution =
-        solver_->solve(qp, settings, {workspace.get(), &mode_hint, &point.controls});
-    RoundReport report{solution.status,  solution.objective,     kInfinity,
-                       solution.nodes,   solution.qp_iterations, solution.incumbent_qps,
-                       solution.solve_ms};
-    if (solution.status != MiqpStatus::Optimal || !solution.has_solution()) {
+  for (int round = 1; round <= e.max_iterations; ++round) {
+    const RoundSolution round_solution = solve_round(c, point, kInfinity, result);
+    const LaneChangeSolution& solution = round_solution.solution;
+    RoundReport report = report_of(solution);
+    if (!solved(solution)) {
       result.rounds.push_back(report);
-      result.status = status_of_failed_round(solution.status);
-      result.reason = "round " + std::to_string(round) + ": " +
-                      std::string(lanechange::expert::to_string(solution.status)) +
-                      (solution.message.empty() ? "" : " (" + solution.message + ")");
-      result.total_ms = elapsed_ms(start);
-      return result;
+      fail_round(result, solution);
+      return;
     }
     if (round > 1) report.max_change = largest_position_change(solution.path, result.path);
     const double repeat = round > 2 ? largest_position_change(solution.path, two_back) : kInfinity;
-    const bool cycling = repeat <= config.expert.cycle_tolerance &&
-                         report.max_change > config.expert.convergence_tolerance;
+    const bool cycling = repeat <= e.cycle_tolerance && report.max_change > e.convergence_tolerance;
     result.rounds.push_back(report);
     two_back = std::move(result.path);
-    result.path = solution.path;
-    result.modes = solution.modes;
-    result.occupancy = occupancy_of(qp, solution.modes);
-    result.objective = solution.objective;
+    adopt(result, round_solution);
     point = solution.path;
-    if (round > 1 && report.max_change <= config.expert.convergence_tolerance) {
+    if (round > 1 && report.max_change <= e.convergence_tolerance) {
       result.status = PlanStatus::Converged;
-      result.total_ms = elapsed_ms(start);
-      return result;
+      return;
     }
     if (cycling) {
       // The next round starts where the last but one did, so it repeats it:
@@ -150,15 +190,139 @@ ExpertResult ExpertPlanner::plan(const Scenario& scenario, const PlanLimits& lim
                     "%.3f m: the rounds alternate between two paths",
                     round, round - 2, repeat, report.max_change);
       result.reason = reason;
-      result.total_ms = elapsed_ms(start);
-      return result;
+      previous = std::move(two_back);
+      return;
     }
   }
   result.status = PlanStatus::IterationLimit;
   char reason[128];
   std::snprintf(reason, sizeof reason, "not converged after %d rounds (last change %.3f m)",
-                config.expert.max_iterations, result.rounds.back().max_change);
+                e.max_iterations, result.rounds.back().max_change);
   result.reason = reason;
+  previous = std::move(two_back);
+}
+
+// True when the step from `point` to `next` turns back on the step that led
+// from `previous` to `point` (negative inner product of the x and y moves):
+// the linearization about `point` contradicts the one before, so neither is to
+// be trusted that far.
+bool reverses(const Iterate& next, const Iterate& point, const Iterate& previous) {
+  if (previous.states.empty()) return false;
+  double inner = 0.0;
+  for (std::size_t k = 0; k < point.states.size(); ++k) {
+    for (int c : {kX, kY}) {
+      inner +=
+          (next.states[k][c] - point.states[k][c]) * (point.states[k][c] - previous.states[k][c]);
+    }
+  }
+  return inner < 0.0;
+}
+
+// The states the controls of `path` reach through the nonlinear discrete
+// model. A linearization about them is exact there, so a box around them
+// always holds a path with their dynamics, however small the box; a box around
+// a round's own solution would not (it is off its own linearization by up to
+// the defect, decimetres in the rounds that fail).
+Iterate rollout(const Scenario& scenario, const Iterate& path, double dt) {
+  Iterate out;
+  out.controls = path.controls;
+  out.states.reserve(path.states.size());
+  EgoState z = scenario.ego;
+  for (std::size_t k = 0; k < path.states.size(); ++k) {
+    out.states.emplace_back(z.x, z.y, z.v, z.theta);
+    if (k < path.controls.size()) {
+      z = step_trapezoidal(z, {path.controls[k][kA], path.controls[k][kOmega]}, dt);
+    }
+  }
+  return out;
+}
+
+// Rounds within a box around the rollout of the last solution, where the plain
+// rounds failed. A round converges by the plain test: its solution is within
+// the tolerance of the path it was linearized about. With the box slack, that
+// is a fixed point of the plain rounds restricted to the box; once the box is
+// smaller than the tolerance the test holds by construction, and the plan is
+// a path within the tolerance of a trajectory of the nonlinear model, the best
+// within the box about it (docs/expert.md counts both kinds). A step that
+// reverses the last one, or fails to contract, shrinks the box; an empty box
+// grows it again.
+void trust_region_rounds(const RoundContext& c, ExpertResult& result, Iterate previous) {
+  const ExpertSettings& e = c.config.expert;
+  const int plain = result.iterations();
+  Iterate point = rollout(c.scenario, result.path, c.dt);
+  double radius = e.trust_radius;
+  double last_change = result.rounds.back().max_change;
+  for (int extra = 1; extra <= e.trust_rounds; ++extra) {
+    const RoundSolution round_solution = solve_round(c, point, radius, result);
+    const LaneChangeSolution& solution = round_solution.solution;
+    RoundReport report = report_of(solution);
+    report.trust_radius = radius;
+    if (!solved(solution)) {
+      result.rounds.push_back(report);
+      if (solution.status == MiqpStatus::Infeasible) {
+        radius /= e.trust_shrink;
+        continue;
+      }
+      fail_round(result, solution);
+      return;
+    }
+    report.max_change = largest_position_change(solution.path, point);
+    result.rounds.push_back(report);
+    adopt(result, round_solution);
+    if (report.max_change <= e.convergence_tolerance) {
+      result.status = PlanStatus::Converged;
+      result.reason.clear();
+      return;
+    }
+    // A step inside the box that is no shorter than the last one does not
+    // contract (rounds that drift, as under IDM, where the follower answers
+    // each new path): a smaller box makes it.
+    const bool stalls = report.max_change < radius && report.max_change >= last_change;
+    if (stalls || reverses(solution.path, point, previous)) radius *= e.trust_shrink;
+    last_change = report.max_change;
+    previous = std::move(point);
+    point = rollout(c.scenario, solution.path, c.dt);
+  }
+  result.status = PlanStatus::IterationLimit;
+  char reason[160];
+  std::snprintf(reason, sizeof reason,
+                "not converged after %d rounds and %d in a trust region (last change %.3f m, "
+                "radius %.3f m)",
+                plain, e.trust_rounds, result.rounds.back().max_change, radius);
+  result.reason = reason;
+}
+
+}  // namespace
+
+ExpertResult ExpertPlanner::plan(const Scenario& scenario, const PlanLimits& limits,
+                                 const PlanHints& hints) const {
+  const auto start = Clock::now();
+  const Config config = effective_config(config_, scenario);
+  const double dt = scenario.horizon / scenario.steps;
+  const auto workspace = solver_->make_workspace();
+  const auto nodes = static_cast<std::size_t>(scenario.steps) + 1;
+  const bool path_fits = hints.path != nullptr && hints.path->states.size() == nodes &&
+                         hints.path->controls.size() == nodes - 1;
+  const bool modes_fit = hints.modes != nullptr && hints.modes->size() == nodes;
+  const RoundContext context{scenario,
+                             config,
+                             *solver_,
+                             workspace.get(),
+                             start,
+                             limits.time_limit_s,
+                             scenario.steps + config.expert.prediction_lead_steps,
+                             dt,
+                             modes_fit ? hints.modes : nullptr};
+  ExpertResult result;
+  result.prediction = predict_traffic(scenario, config, context.predicted_steps, dt);
+  Iterate previous;
+  plain_rounds(context, path_fits ? *hints.path : warm_start(scenario, config, result.prediction),
+               result, previous);
+  const bool failed_to_converge =
+      result.status == PlanStatus::Cycling || result.status == PlanStatus::IterationLimit;
+  if (failed_to_converge && config.expert.globalisation == Globalisation::TrustRegion) {
+    trust_region_rounds(context, result, std::move(previous));
+  }
   result.total_ms = elapsed_ms(start);
   return result;
 }
@@ -225,6 +389,7 @@ Trajectory ExpertPlanner::to_trajectory(const ExpertResult& result,
          {"qp_iterations", r.qp_iterations},
          {"incumbent_qps", r.incumbent_qps},
          {"solve_ms", r.solve_ms}});
+    if (std::isfinite(r.trust_radius)) rounds.back()["trust_radius"] = r.trust_radius;
   }
   t.details = {{"objective", result.objective},      {"iterations", result.iterations()},
                {"status", to_string(result.status)}, {"solver", solver_->name()},

@@ -22,6 +22,22 @@ TEST(Config, SaveAndLoadRoundTrip) {
   EXPECT_EQ(loaded.expert.lane_rule, LaneRule::EitherOr);
 }
 
+TEST(Config, GlobalisationRoundTripsThroughJson) {
+  const Config c = config_from_json(nlohmann::json::parse(
+      R"({"expert": {"globalisation": "off", "trust_radius": 0.75, "trust_shrink": 0.25,
+                     "trust_rounds": 4}})"));
+  EXPECT_EQ(c.expert.globalisation, Globalisation::Off);
+  EXPECT_DOUBLE_EQ(c.expert.trust_radius, 0.75);
+  EXPECT_DOUBLE_EQ(c.expert.trust_shrink, 0.25);
+  EXPECT_EQ(c.expert.trust_rounds, 4);
+  const nlohmann::json written = c;
+  EXPECT_EQ(written["expert"]["globalisation"], "off");
+  EXPECT_EQ(nlohmann::json(config_from_json(written)), written);
+  EXPECT_EQ(Config{}.expert.globalisation, Globalisation::TrustRegion);
+  // The authors' code has no globalisation: its preset keeps their verdicts.
+  EXPECT_EQ(make_preset("authors").expert.globalisation, Globalisation::Off);
+}
+
 TEST(Config, PartialFileStartsFromItsPreset) {
   const Config c = config_from_json(
       nlohmann::json::parse(R"({"preset": "authors", "expert": {"max_iterations": 3}})"));
@@ -56,6 +72,10 @@ TEST(Config, RejectsUnknownKeysAndBadValuesByName) {
   EXPECT_EQ(field_of(R"({"lane_width": -1})"), "lane_width");
   EXPECT_EQ(field_of(R"({"limits": {"a": [2, -2]}})"), "limits.a");
   EXPECT_EQ(field_of(R"({"expert": {"lane_rule": "sideways"}})"), "expert.lane_rule");
+  EXPECT_EQ(field_of(R"({"expert": {"globalisation": "hope"}})"), "expert.globalisation");
+  EXPECT_EQ(field_of(R"({"expert": {"trust_radius": 0}})"), "expert.trust_radius");
+  EXPECT_EQ(field_of(R"({"expert": {"trust_shrink": 1}})"), "expert.trust_shrink");
+  EXPECT_EQ(field_of(R"({"expert": {"trust_rounds": 0}})"), "expert.trust_rounds");
   EXPECT_EQ(field_of(R"({"preset": "nobody"})"), "preset");
   EXPECT_EQ(field_of(R"({"idm": {"max_accel": "fast"}})"), "idm.max_accel");
   EXPECT_EQ(field_of(R"({"expert": {"cycle_tolerance": -1e-3}})"), "expert.cycle_tolerance");

@@ -3,7 +3,9 @@
 // Round r linearizes the dynamics about round r-1's solution (the warm start
 // first), re-predicts the cars (IDM reacts to that path), and solves the MIQP.
 // It stops when the largest change of x and y between two rounds' solutions is
-// within the tolerance, or at the round limit.
+// within the tolerance, or at the round limit. Where those rounds fail (a
+// cycle or the limit), config.expert.globalisation may go on with rounds kept
+// within a trust region of the last solution (docs/expert.md).
 #include <memory>
 #include <optional>
 #include <string>
@@ -35,6 +37,7 @@ struct RoundReport {
   long qp_iterations = 0;
   long incumbent_qps = 0;
   double solve_ms = 0.0;
+  double trust_radius = kInfinity;  ///< m, the box of a trust-region round (none: infinite)
 };
 
 struct ExpertResult {
