@@ -1,9 +1,13 @@
 #include "sim_commands.hpp"
 
+#include <unistd.h>
+
 #include <iostream>
+#include <sstream>
 
 #include "lanechange/planner/planner.hpp"
 #include "lanechange/scenario.hpp"
+#include "lanechange/sim/evaluate.hpp"
 #include "lanechange/sim/simulator.hpp"
 #include "lanechange/trajectory.hpp"
 
@@ -33,6 +37,40 @@ void add_simulate(CLI::App& app, ConfigSource config_source) {
               << rollout.steps.size() << " steps, median step " << m.median_step_ms << " ms, max "
               << m.max_step_ms << " ms, fallback steps " << m.fallbacks
               << (rollout.reason.empty() ? "" : "; " + rollout.reason) << "\n";
+  });
+}
+
+void add_evaluate(CLI::App& app, ConfigSource config_source) {
+  auto* cmd = app.add_subcommand(
+      "evaluate", "Closed-loop rollouts of sampled scenarios for one or more planners (resumable)");
+  static sim::EvaluateOptions o;
+  static std::string behavior = "all";
+  static std::string planners = "miqp";
+  static int jobs = 0;
+  cmd->add_option("--count", o.count, "How many sampled scenarios")->required();
+  cmd->add_option("--seed", o.seed, "Sampler seed")->required();
+  cmd->add_option("--behavior", behavior, "constant_speed, constant_accel, idm or all");
+  cmd->add_option("--planner", planners, "Planner names, comma-separated (miqp, keep-lane)");
+  cmd->add_option("--out", o.out_dir, "Output directory; rerun the command to resume")->required();
+  cmd->add_option("--jobs", jobs, "Worker threads (default: all cores)")
+      ->check(CLI::NonNegativeNumber);
+  cmd->add_option("--shard-size", o.shard_size, "Scenarios per shard file");
+  cmd->add_option("--duration", o.duration, "Seconds per rollout (default: horizon + settle)");
+  cmd->callback([config_source] {
+    o.config = config_source();
+    o.behavior.reset();
+    if (behavior != "all") o.behavior = behavior_from_string(behavior, "--behavior");
+    o.planners.clear();
+    std::stringstream names(planners);
+    for (std::string name; std::getline(names, name, ',');) o.planners.push_back(name);
+    sim::EvaluateRun run;
+    run.jobs = jobs;
+    run.progress = &std::cerr;
+    run.progress_on_terminal = ::isatty(STDERR_FILENO) != 0;
+    const sim::EvaluateReport r = sim::evaluate(o, run);
+    std::cerr << "evaluate: " << r.rollouts << " rollouts in " << r.wall_s << " s ("
+              << r.shards_skipped << " of " << r.shards_total << " shards were done already); see "
+              << o.out_dir << "/summary.csv\n";
   });
 }
 

@@ -6,5 +6,6 @@
 namespace lanechange::app {
 
 void add_simulate(CLI::App& app, ConfigSource config);
+void add_evaluate(CLI::App& app, ConfigSource config);
 
 }  // namespace lanechange::app

@@ -16,25 +16,8 @@
 namespace lanechange::expert {
 namespace {
 
-Scenario open_road_scenario(Behavior behavior = Behavior::ConstantSpeed) {
-  Scenario s = default_scenario(Config{});
-  s.behavior = behavior;
-  s.ego = {0.0, 0.0, 8.0, 0.0, 0.0};
-  s.leader = {40.0, 8.0, 0.0};
-  s.follower = {-60.0, 8.0, 0.0};
-  s.target = {70.0, 8.0, 0.0};
-  validate_scenario(s);
-  return s;
-}
-
-// The target lane packed bumper to bumper around the ego: no gap at all.
-Scenario no_gap_scenario() {
-  Scenario s = open_road_scenario();
-  s.follower = {-2.0, 8.0, 0.0};
-  s.target = {3.0, 8.0, 0.0};
-  validate_scenario(s);
-  return s;
-}
+using testing::no_gap_scenario;
+using testing::open_road_scenario;
 
 TEST(Formulation, LinearizedStepIsExactAtItsOwnPoint) {
   // A path of the nonlinear model, linearized about itself, satisfies the

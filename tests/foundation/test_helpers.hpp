@@ -71,4 +71,25 @@ inline CommandResult run_cli(const std::string& args) {
   return result;
 }
 
+/// Every car far away: a wide-open gap in the target lane.
+inline Scenario open_road_scenario(Behavior behavior = Behavior::ConstantSpeed) {
+  Scenario s = default_scenario(Config{});
+  s.behavior = behavior;
+  s.ego = {0.0, 0.0, 8.0, 0.0, 0.0};
+  s.leader = {40.0, 8.0, 0.0};
+  s.follower = {-60.0, 8.0, 0.0};
+  s.target = {70.0, 8.0, 0.0};
+  validate_scenario(s);
+  return s;
+}
+
+// The target lane packed bumper to bumper around the ego: no gap at all.
+inline Scenario no_gap_scenario() {
+  Scenario s = open_road_scenario();
+  s.follower = {-2.0, 8.0, 0.0};
+  s.target = {3.0, 8.0, 0.0};
+  validate_scenario(s);
+  return s;
+}
+
 }  // namespace lanechange::testing

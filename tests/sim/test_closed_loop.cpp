@@ -21,24 +21,9 @@ using planner::Observation;
 using sim::Outcome;
 
 Scenario open_road(Behavior behavior = Behavior::ConstantSpeed) {
-  Scenario s = default_scenario(Config{});
-  s.behavior = behavior;
-  s.ego = {0.0, 0.0, 8.0, 0.0, 0.0};
-  s.leader = {40.0, 8.0, 0.0};
-  s.follower = {-60.0, 8.0, 0.0};
-  s.target = {70.0, 8.0, 0.0};
-  validate_scenario(s);
-  return s;
+  return testing::open_road_scenario(behavior);
 }
-
-// The target lane packed around the ego: no gap at all.
-Scenario no_gap() {
-  Scenario s = open_road();
-  s.follower = {-2.0, 8.0, 0.0};
-  s.target = {3.0, 8.0, 0.0};
-  validate_scenario(s);
-  return s;
-}
+Scenario no_gap() { return testing::no_gap_scenario(); }
 
 // A planner given as a function of the observation (tests only).
 class ScriptedPlanner final : public planner::ClosedLoopPlanner {

@@ -1,0 +1,49 @@
+#pragma once
+// Many closed-loop rollouts (docs/closed_loop.md, "evaluate"): sampled
+// scenarios, each run by every planner named, on threads, resumable after a
+// kill. Writes rollouts.csv (a row per scenario and planner) and summary.csv
+// (rates and percentiles per planner and behavior).
+#include <cstdint>
+#include <optional>
+#include <ostream>
+#include <string>
+#include <vector>
+
+#include "lanechange/config.hpp"
+#include "lanechange/scenario.hpp"
+
+namespace lanechange::sim {
+
+struct EvaluateOptions {
+  long long count = 0;
+  std::uint64_t seed = 0;
+  std::optional<Behavior> behavior;  ///< none: each scenario's own draw
+  std::vector<std::string> planners;
+  std::string out_dir;
+  long long shard_size = 20;
+  double duration = 0.0;  ///< s per rollout; 0: horizon + settle time
+  Config config;
+};
+
+struct EvaluateRun {
+  int jobs = 0;  ///< worker threads; 0: one per core
+  std::ostream* progress = nullptr;
+  bool progress_on_terminal = false;
+};
+
+struct EvaluateReport {
+  long long shards_total = 0;
+  long long shards_skipped = 0;  ///< finished by an earlier run
+  long long rollouts = 0;        ///< run by this call
+  double wall_s = 0.0;
+};
+
+/// Runs (or resumes) an evaluation. Throws InputError for bad options or an
+/// output directory that holds another evaluation (left untouched).
+EvaluateReport evaluate(const EvaluateOptions& options, const EvaluateRun& run);
+
+/// The column names of rollouts.csv and summary.csv.
+[[nodiscard]] std::vector<std::string> rollout_columns();
+[[nodiscard]] std::vector<std::string> summary_columns();
+
+}  // namespace lanechange::sim

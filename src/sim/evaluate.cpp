@@ -1,0 +1,234 @@
+#include "lanechange/sim/evaluate.hpp"
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <mutex>
+#include <sstream>
+#include <thread>
+
+#include "common/json_fields.hpp"
+#include "lanechange/data/progress.hpp"
+#include "lanechange/error.hpp"
+#include "lanechange/planner/planner.hpp"
+#include "lanechange/sampler.hpp"
+#include "lanechange/sim/simulator.hpp"
+
+namespace lanechange::sim {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+constexpr std::string_view kEvaluationFormat = "lanechange.evaluation/1";
+constexpr const char* kManifest = "evaluation.json";
+
+std::string shard_file(long long shard) {
+  char name[40];
+  std::snprintf(name, sizeof name, "rollouts-%05lld.csv", shard);
+  return name;
+}
+
+json parameters_of(const EvaluateOptions& o) {
+  return {{"count", o.count},
+          {"seed", o.seed},
+          {"behavior", o.behavior ? std::string(to_string(*o.behavior)) : "all"},
+          {"planners", o.planners},
+          {"shard_size", o.shard_size},
+          {"duration", o.duration},
+          {"config", o.config}};
+}
+
+void validate(const EvaluateOptions& o) {
+  auto require = [](bool ok, const char* field, const std::string& problem) {
+    if (!ok) throw InputError(field, problem);
+  };
+  require(o.count >= 1 && o.count <= 100'000'000LL, "--count", "must be in [1, 1e8]");
+  require(o.shard_size >= 1, "--shard-size", "must be at least 1");
+  require(!o.planners.empty(), "--planner", "names no planner");
+  require(!o.out_dir.empty(), "--out", "must name a directory");
+  require(std::isfinite(o.duration) && o.duration >= 0, "--duration", "must be >= 0");
+  o.config.validate();
+  for (const auto& name : o.planners) (void)planner::make_planner(name, o.config);
+}
+
+// Creates the directory and its manifest, or checks that the manifest there
+// is of this very evaluation. Returns true when it is already complete.
+bool prepare(const EvaluateOptions& o, const json& parameters) {
+  const fs::path dir(o.out_dir);
+  const fs::path manifest = dir / kManifest;
+  if (fs::exists(manifest)) {
+    json old;
+    try {
+      old = json::parse(std::ifstream(manifest));
+    } catch (const json::exception&) {
+      throw InputError("--out", manifest.string() + " is not an evaluation manifest");
+    }
+    if (old.value("format", std::string()) != kEvaluationFormat ||
+        old.value("parameters", json()) != parameters) {
+      throw InputError("--out", o.out_dir +
+                                    " holds an evaluation with other parameters; use another "
+                                    "directory or the same command");
+    }
+    return old.value("status", std::string()) == "complete";
+  }
+  std::error_code error;
+  fs::create_directories(dir, error);
+  if (!fs::is_directory(dir)) throw InputError("--out", "cannot create " + o.out_dir);
+  if (!fs::is_empty(dir)) {
+    throw InputError("--out", o.out_dir + " is not empty and holds no evaluation");
+  }
+  lanechange::detail::write_file_atomically(
+      manifest.string(),
+      json{{"format", kEvaluationFormat}, {"status", "incomplete"}, {"parameters", parameters}}
+              .dump(2) +
+          "\n");
+  return false;
+}
+
+std::string number(double v) {
+  if (!std::isfinite(v)) return "";
+  std::ostringstream out;
+  out.precision(10);
+  out << v;
+  return out.str();
+}
+
+std::string csv_text(const std::string& text) {
+  if (text.find_first_of(",\"\n") == std::string::npos) return text;
+  std::string quoted = "\"";
+  for (char c : text)
+    quoted += c == '"' ? std::string("\"\"") : std::string(1, c == '\n' ? ' ' : c);
+  return quoted + "\"";
+}
+
+std::string rollout_row(long long index, const Scenario& s, const std::string& planner,
+                        const Rollout& r) {
+  const RolloutMetrics& m = r.metrics;
+  std::string row = std::to_string(index) + "," + std::string(to_string(s.behavior)) + "," +
+                    planner + "," + std::string(to_string(r.outcome)) + "," +
+                    (r.trajectory.collision ? "1" : "0");
+  for (int v : {m.takeovers, m.fallbacks, m.overruns, m.failures, m.clipped}) {
+    row += ',';
+    row += std::to_string(v);
+  }
+  for (double v : {m.time_to_target_lane >= 0 ? m.time_to_target_lane : NAN, m.min_gap, m.min_ttc,
+                   m.max_abs_accel, m.rms_jerk, m.max_abs_omega, m.median_step_ms, m.max_step_ms}) {
+    row += ',';
+    row += number(v);
+  }
+  return row + "," + csv_text(r.reason) + "\n";
+}
+
+std::string header(const std::vector<std::string>& columns) {
+  std::string line;
+  for (const auto& c : columns) {
+    if (!line.empty()) line += ',';
+    line += c;
+  }
+  return line + "\n";
+}
+
+}  // namespace
+
+std::vector<std::string> rollout_columns() {
+  return {"index",
+          "behavior",
+          "planner",
+          "outcome",
+          "collision",
+          "takeovers",
+          "fallbacks",
+          "overruns",
+          "failures",
+          "clipped",
+          "time_to_target_lane",
+          "min_gap",
+          "min_ttc",
+          "max_abs_accel",
+          "rms_jerk",
+          "max_abs_omega",
+          "median_step_ms",
+          "max_step_ms",
+          "reason"};
+}
+
+namespace detail {
+void write_results(const std::string& dir, long long shards);
+}  // namespace detail
+
+EvaluateReport evaluate(const EvaluateOptions& o, const EvaluateRun& run) {
+  validate(o);
+  const auto start = std::chrono::steady_clock::now();
+  const json parameters = parameters_of(o);
+  EvaluateReport report;
+  report.shards_total = (o.count + o.shard_size - 1) / o.shard_size;
+  if (prepare(o, parameters)) {
+    report.shards_skipped = report.shards_total;
+    return report;
+  }
+  std::vector<long long> todo;
+  for (long long s = 0; s < report.shards_total; ++s) {
+    if (fs::exists(fs::path(o.out_dir) / shard_file(s))) {
+      ++report.shards_skipped;
+    } else {
+      todo.push_back(s);
+    }
+  }
+  std::vector<std::shared_ptr<const planner::ClosedLoopPlanner>> planners;
+  for (const auto& name : o.planners) planners.push_back(planner::make_planner(name, o.config));
+  const ScenarioSampler sampler(o.config, o.seed);
+  const auto per_shard = static_cast<long long>(planners.size());
+  long long total = 0;
+  for (long long s : todo) total += std::min(o.shard_size, o.count - s * o.shard_size) * per_shard;
+  data::Progress progress(run.progress, run.progress_on_terminal, total);
+  std::atomic<std::size_t> next{0};
+  std::atomic<long long> done{0};
+  std::mutex error_mutex;
+  std::exception_ptr error;
+  auto worker = [&] {
+    try {
+      for (std::size_t i = next++; i < todo.size(); i = next++) {
+        const long long shard = todo[i];
+        std::string rows = header(rollout_columns());
+        const long long first = shard * o.shard_size;
+        for (long long index = first; index < std::min(o.count, first + o.shard_size); ++index) {
+          const Scenario s = sampler.sample(static_cast<std::uint64_t>(index), o.behavior);
+          for (std::size_t p = 0; p < planners.size(); ++p) {
+            const Rollout r = simulate(s, *planners[p], o.config, {o.duration});
+            rows += rollout_row(index, s, o.planners[p], r);
+            progress.add(1);
+            ++done;
+          }
+        }
+        lanechange::detail::write_file_atomically(
+            (fs::path(o.out_dir) / shard_file(shard)).string(), rows);
+      }
+    } catch (...) {
+      const std::lock_guard lock(error_mutex);
+      if (!error) error = std::current_exception();
+      next = todo.size();
+    }
+  };
+  const int jobs = run.jobs > 0 ? run.jobs : std::max(1U, std::thread::hardware_concurrency());
+  std::vector<std::thread> threads;
+  for (int j = 0; j < jobs; ++j) threads.emplace_back(worker);
+  for (auto& t : threads) t.join();
+  progress.finish();
+  if (error) std::rethrow_exception(error);
+  detail::write_results(o.out_dir, report.shards_total);
+  json manifest = {
+      {"format", kEvaluationFormat}, {"status", "complete"}, {"parameters", parameters}};
+  lanechange::detail::write_file_atomically((fs::path(o.out_dir) / kManifest).string(),
+                                            manifest.dump(2) + "\n");
+  report.rollouts = done;
+  report.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return report;
+}
+
+}  // namespace lanechange::sim
