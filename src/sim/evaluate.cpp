@@ -186,7 +186,8 @@ EvaluateReport evaluate(const EvaluateOptions& o, const EvaluateRun& run) {
   const auto per_shard = static_cast<long long>(planners.size());
   long long total = 0;
   for (long long s : todo) total += std::min(o.shard_size, o.count - s * o.shard_size) * per_shard;
-  data::Progress progress(run.progress, run.progress_on_terminal, total);
+  data::Progress progress(run.progress, run.progress_on_terminal, total, -1.0, "evaluate",
+                          "rollouts");
   std::atomic<std::size_t> next{0};
   std::atomic<long long> done{0};
   std::mutex error_mutex;

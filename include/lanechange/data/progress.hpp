@@ -5,17 +5,21 @@
 #include <mutex>
 #include <ostream>
 #include <string>
+#include <string_view>
 
 namespace lanechange::data {
 
 /// One progress line: done/total, rate and ETA (a bar on a terminal).
+/// `label` starts a log line ("generate: ..."); `unit` names what is counted.
 [[nodiscard]] std::string format_progress(long long done, long long total, double elapsed_s,
-                                          bool terminal);
+                                          bool terminal, std::string_view label = "generate",
+                                          std::string_view unit = "scenarios");
 
 class Progress {
  public:
   /// `out` may be null (no output). Thread-safe.
-  Progress(std::ostream* out, bool terminal, long long total, double interval_s = -1.0);
+  Progress(std::ostream* out, bool terminal, long long total, double interval_s = -1.0,
+           std::string label = "generate", std::string unit = "scenarios");
   void add(long long done);
   /// Prints the last line (and ends the bar's line on a terminal).
   void finish();
@@ -29,6 +33,8 @@ class Progress {
   long long total_;
   long long done_ = 0;
   double interval_s_;
+  std::string label_;
+  std::string unit_;
   Clock::time_point start_ = Clock::now();
   Clock::time_point last_print_ = start_;
   std::mutex mutex_;
