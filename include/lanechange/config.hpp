@@ -179,7 +179,10 @@ struct ClosedLoopSettings {
   /// The closed-loop expert plans with expert.monotone_lateral on: without
   /// it, its plans swing back before the line to take a run-up.
   bool monotone_lateral = true;
-  double min_horizon = 1.0;           ///< s: the shrinking horizon stops shrinking here
+  double min_horizon = 2.5;  ///< s: the shrinking horizon stops shrinking here
+  /// Steps a failed re-plan may follow the last plan open loop before the
+  /// fallback takes over: a stale plan drifts from the real state.
+  int stale_plan_steps = 5;
   double settled_heading = 0.035;     ///< rad (2 deg): the manoeuvre is over when |theta| is below
   double settled_offset = 0.25;       ///< m from the target-lane centre, with the heading above
   double keeper_lateral_gain = 0.08;  ///< rad per m of offset from the lane centre (lane keeper)

@@ -18,6 +18,7 @@ void validate_closed_loop(const ClosedLoopSettings& c) {
   require(c.step_budget_ms > 0, "closed_loop.step_budget_ms", "must be positive");
   require(c.replan_period >= 1, "closed_loop.replan_period", "must be at least 1");
   require(c.min_horizon > 0, "closed_loop.min_horizon", "must be positive");
+  require(c.stale_plan_steps >= 0, "closed_loop.stale_plan_steps", "must not be negative");
   require(c.settled_heading > 0 && c.settled_offset > 0, "closed_loop",
           "settled_heading and settled_offset must be positive");
   require(c.keeper_lateral_gain > 0 && c.keeper_heading_gain > 0, "closed_loop",

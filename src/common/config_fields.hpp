@@ -43,6 +43,7 @@ void visit_fields(V& v, S& s) requires std::same_as<std::remove_const_t<S>, Clos
   v("horizon_mode", s.horizon_mode);
   v("monotone_lateral", s.monotone_lateral);
   v("min_horizon", s.min_horizon);
+  v("stale_plan_steps", s.stale_plan_steps);
   v("settled_heading", s.settled_heading);
   v("settled_offset", s.settled_offset);
   v("keeper_lateral_gain", s.keeper_lateral_gain);

@@ -139,9 +139,11 @@ LaneChangeQp build_lane_change_qp(const Scenario& s, const Config& config, const
     State lo, hi;
     // "y never decreases" as a constraint: a heading of at least 0, from the
     // first node the yaw rate can bring it there.
-    const double lowest_heading = e.monotone_lateral
-                                      ? std::min(0.0, s.ego.theta + s.limits.omega.hi * t)
-                                      : -std::numbers::pi / 2;
+    // Once the ego is at the target-lane centre it may settle back onto it
+    // (the labeller allows that too), so the bound holds only below it.
+    const bool monotone = e.monotone_lateral && s.ego.y < s.lane_width - config.labels.reach;
+    const double lowest_heading =
+        monotone ? std::min(0.0, s.ego.theta + s.limits.omega.hi * t) : -std::numbers::pi / 2;
     lo << s.ego.x - kXSlack, -s.limits.lateral_margin, s.limits.v.lo, lowest_heading;
     hi << s.ego.x + s.limits.v.hi * t + kXSlack, s.lane_width + s.limits.lateral_margin,
         s.limits.v.hi, std::numbers::pi / 2;

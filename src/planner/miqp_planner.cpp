@@ -73,7 +73,8 @@ Decision MiqpSession::act(const Observation& o) {
   if (due) failure = replan(o);
   if (plan_) {
     const int offset = o.step - plan_step_;
-    if (offset < static_cast<int>(plan_->controls.size())) {
+    const bool fresh = offset <= config_.closed_loop.stale_plan_steps;
+    if (offset < static_cast<int>(plan_->controls.size()) && (failure.empty() || fresh)) {
       const expert::Control& u = plan_->controls[static_cast<std::size_t>(offset)];
       Decision d{{u[expert::kA], u[expert::kOmega]}, ActStatus::Planned, ""};
       if (!failure.empty()) d.reason = "re-plan failed (" + failure + "): following the last plan";

@@ -112,7 +112,7 @@ std::string rollout_row(long long index, const Scenario& s, const std::string& p
   const RolloutMetrics& m = r.metrics;
   std::string row = std::to_string(index) + "," + std::string(to_string(s.behavior)) + "," +
                     planner + "," + std::string(to_string(r.outcome)) + "," +
-                    (r.trajectory.collision ? "1" : "0");
+                    (r.trajectory.collision ? "1" : "0") + "," + (r.collision_at_fault ? "1" : "0");
   for (int v : {m.takeovers, m.fallbacks, m.overruns, m.failures, m.clipped}) {
     row += ',';
     row += std::to_string(v);
@@ -137,25 +137,13 @@ std::string header(const std::vector<std::string>& columns) {
 }  // namespace
 
 std::vector<std::string> rollout_columns() {
-  return {"index",
-          "behavior",
-          "planner",
-          "outcome",
-          "collision",
-          "takeovers",
-          "fallbacks",
-          "overruns",
-          "failures",
-          "clipped",
-          "time_to_target_lane",
-          "min_gap",
-          "min_ttc",
-          "max_abs_accel",
-          "rms_jerk",
-          "max_abs_omega",
-          "median_step_ms",
-          "max_step_ms",
-          "reason"};
+  return {"index",       "behavior",      "planner",
+          "outcome",     "collision",     "collision_at_fault",
+          "takeovers",   "fallbacks",     "overruns",
+          "failures",    "clipped",       "time_to_target_lane",
+          "min_gap",     "min_ttc",       "max_abs_accel",
+          "rms_jerk",    "max_abs_omega", "median_step_ms",
+          "max_step_ms", "reason"};
 }
 
 namespace detail {

@@ -103,11 +103,15 @@ RolloutMetrics measure(const Rollout& rollout, const Scenario& scene, const Conf
   }
   m.rms_jerk = applied > 0 ? std::sqrt(jerk_sq / applied) : 0.0;
   std::vector<double> ms;
+  planner::ActStatus before = planner::ActStatus::Planned;
   for (const StepRecord& s : rollout.steps) {
     if (s.lane_keeping) continue;
     ms.push_back(s.compute_ms);
     m.max_step_ms = std::max(m.max_step_ms, s.compute_ms);
-    m.takeovers += s.status == planner::ActStatus::TookOver ? 1 : 0;
+    // A take-over lasts while the expert drives: count its start.
+    const bool took_over = s.status == planner::ActStatus::TookOver;
+    m.takeovers += took_over && before != planner::ActStatus::TookOver ? 1 : 0;
+    before = s.status;
     m.fallbacks += s.status == planner::ActStatus::Fallback ? 1 : 0;
     m.failures += s.status == planner::ActStatus::Failed && !s.overrun ? 1 : 0;
     m.overruns += s.overrun ? 1 : 0;

@@ -36,6 +36,7 @@ json rollout_to_json(const Rollout& r) {
   json out = trajectory_to_json(r.trajectory);
   const RolloutMetrics& m = r.metrics;
   out["outcome"] = to_string(r.outcome);
+  out["collision_at_fault"] = r.collision_at_fault;
   out["compute_ms"]["median_step"] = m.median_step_ms;
   json per_step = json::array();
   for (const StepRecord& s : r.steps) per_step.push_back(s.compute_ms);

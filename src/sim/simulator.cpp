@@ -151,8 +151,15 @@ Rollout simulate(const Scenario& scene, const planner::ClosedLoopPlanner& planne
   t.collision = hit.has_value();
   out.outcome = judge(t, config, out.reason);
   if (hit) {
+    const EgoState& ego = t.ego[static_cast<std::size_t>(hit->node)];
+    const double car_x = t.others.car(hit->car).x[static_cast<std::size_t>(hit->node)];
+    const double half_width = scene.vehicle.width / 2.0;
+    const double lane = scene.lane_center(hit->car);
+    const bool inside_lane = std::abs(ego.y - lane) + half_width <= scene.lane_width / 2.0;
+    out.collision_at_fault = !(car_x < ego.x && inside_lane);
     out.reason = "collision with the " + std::string(to_string(hit->car)) + " at " +
-                 std::to_string(hit->time) + " s";
+                 std::to_string(hit->time) + " s" +
+                 (out.collision_at_fault ? "" : " (run into from behind: not at fault)");
   }
   t.label = out.outcome == Outcome::WellPosed  ? Label::WellPosed
             : out.outcome == Outcome::IllPosed ? Label::IllPosed

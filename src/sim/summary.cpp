@@ -19,6 +19,7 @@ namespace {
 struct Row {
   std::string behavior, planner, outcome;
   bool collision = false;
+  bool at_fault = false;
   double takeovers = 0, fallbacks = 0, overruns = 0;
   double time_to_target_lane = NAN, min_ttc = NAN, max_abs_accel = 0, rms_jerk = 0;
   double median_step_ms = 0, max_step_ms = 0;
@@ -40,15 +41,16 @@ Row parse(const std::string& line) {
   r.planner = f.at(2);
   r.outcome = f.at(3);
   r.collision = f.at(4) == "1";
-  r.takeovers = field(f, 5);
-  r.fallbacks = field(f, 6);
-  r.overruns = field(f, 7);
-  r.time_to_target_lane = field(f, 10);
-  r.min_ttc = field(f, 12);
-  r.max_abs_accel = field(f, 13);
-  r.rms_jerk = field(f, 14);
-  r.median_step_ms = field(f, 16);
-  r.max_step_ms = field(f, 17);
+  r.at_fault = f.at(5) == "1";
+  r.takeovers = field(f, 6);
+  r.fallbacks = field(f, 7);
+  r.overruns = field(f, 8);
+  r.time_to_target_lane = field(f, 11);
+  r.min_ttc = field(f, 13);
+  r.max_abs_accel = field(f, 14);
+  r.rms_jerk = field(f, 15);
+  r.median_step_ms = field(f, 17);
+  r.max_step_ms = field(f, 18);
   return r;
 }
 
@@ -92,6 +94,7 @@ std::string summary_row(const std::string& planner, const std::string& behavior,
       rate([](const Row* r) { return r->outcome == "failure"; }),
       rate([](const Row* r) { return r->outcome == "aborted"; }),
       rate([](const Row* r) { return r->collision; }),
+      rate([](const Row* r) { return r->at_fault; }),
       mean(&Row::takeovers),
       mean(&Row::fallbacks),
       mean(&Row::overruns),
@@ -121,6 +124,7 @@ std::vector<std::string> summary_columns() {
           "failure_rate",
           "aborted_rate",
           "collision_rate",
+          "at_fault_collision_rate",
           "takeovers_per_rollout",
           "fallback_steps_per_rollout",
           "overruns_per_rollout",

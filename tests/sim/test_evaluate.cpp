@@ -24,7 +24,7 @@ std::string without_times(const std::string& row) {
   for (std::string c; std::getline(in, c, ',');) cells.push_back(c);
   std::string out;
   for (std::size_t i = 0; i < cells.size(); ++i) {
-    if (i == 16 || i == 17) continue;  // median_step_ms, max_step_ms
+    if (i == 17 || i == 18) continue;  // median_step_ms, max_step_ms
     out += cells[i] + "|";
   }
   return out;

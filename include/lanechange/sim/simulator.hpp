@@ -63,6 +63,10 @@ struct Rollout {
   std::vector<StepRecord> steps;
   RolloutMetrics metrics;
   double manoeuvre_over_at = -1.0;  ///< s; -1 if the ego never settled in the target lane
+  /// A collision the ego caused: anything but being run into from behind by
+  /// a car of the lane its body is wholly in (a constant-speed or
+  /// constant-acceleration car does not react to the ego at all).
+  bool collision_at_fault = false;
 };
 
 /// Runs one rollout of `planner` from `scene` (its fields override `config`).
