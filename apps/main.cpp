@@ -18,6 +18,7 @@
 #include "lanechange/plot.hpp"
 #include "lanechange/sampler.hpp"
 #include "lanechange/scenario.hpp"
+#include "learn_commands.hpp"
 
 namespace lc = lanechange;
 
@@ -336,6 +337,7 @@ int main(int argc, char** argv) {
   add_plot(app, global);
   lc::app::add_generate(app, [&global] { return global.config(); });
   lc::app::add_dataset_info(app);
+  lc::app::add_train(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
