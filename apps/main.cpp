@@ -142,20 +142,30 @@ nlohmann::json crosscheck_row(const lc::expert::CrossCheckCase& c, std::uint64_t
           {"agree", c.agree}};
 }
 
-// A case of an earlier cross-check file: its scenario and the reference's verdict.
+// A case of an earlier cross-check file: its scenario, the config it was made
+// with, and the reference's verdict.
 struct StoredCase {
   std::optional<nlohmann::json> scenario;
+  lc::Config config;
   std::uint64_t index = 0;
   std::uint64_t seed = 0;
   int steps = 0;
   lc::expert::StoredReference reference;
 };
 
-StoredCase parse_stored_case(const std::string& line, std::uint64_t seed, int steps) {
+StoredCase parse_stored_case(const std::string& line, long long line_number, std::uint64_t seed,
+                             int steps) {
+  const std::string where = "cross-check line " + std::to_string(line_number);
   try {
     const auto row = nlohmann::json::parse(line);
     StoredCase c;
     if (row.contains("scenario")) c.scenario = row.at("scenario");
+    // A replay checks what the stored verdict was made for, whatever today's
+    // defaults are: a case without its config cannot be replayed faithfully.
+    if (!row.contains("config")) {
+      throw lc::InputError(where, "carries no \"config\" (the config the case was made with)");
+    }
+    c.config = lc::config_from_json(row.at("config"));
     c.index = row.at("index").get<std::uint64_t>();
     c.seed = row.value("seed", seed);
     c.steps = row.value("steps", steps);
@@ -167,7 +177,7 @@ StoredCase parse_stored_case(const std::string& line, std::uint64_t seed, int st
     c.reference.nodes = row.value("reference_nodes", 0L);
     return c;
   } catch (const nlohmann::json::exception& e) {
-    throw lc::InputError("cross-check line", e.what());
+    throw lc::InputError(where, e.what());
   }
 }
 
@@ -189,7 +199,8 @@ void add_crosscheck(CLI::App& app, const GlobalOptions& global) {
   cmd->add_option("--out", out_path, "JSON lines file, one case per line");
   cmd->add_option("--replay", replay_path,
                   "Re-solve only the fast side of the cases in an earlier --out file and compare "
-                  "with its stored reference results (seconds instead of hours)")
+                  "with its stored reference results (seconds instead of hours); each case "
+                  "uses the config stored with it, not --config or --preset")
       ->check(CLI::ExistingFile);
   cmd->callback([&global] {
     const lc::expert::FastLaneChangeSolver fast;
@@ -200,8 +211,9 @@ void add_crosscheck(CLI::App& app, const GlobalOptions& global) {
     // A stored case carries its scenario, so that a replay does not depend on the sampler.
     auto run_case = [&](std::uint64_t index, std::uint64_t case_seed, int case_steps,
                         const lc::expert::StoredReference* stored,
-                        const std::optional<nlohmann::json>& stored_scenario) {
-      lc::Config config = global.config();
+                        const std::optional<nlohmann::json>& stored_scenario,
+                        const lc::Config* stored_config) {
+      lc::Config config = stored_config != nullptr ? *stored_config : global.config();
       if (case_steps > 0) config.expert.steps = case_steps;
       const lc::Scenario scenario = stored_scenario
                                         ? lc::scenario_from_json(*stored_scenario, config)
@@ -223,20 +235,23 @@ void add_crosscheck(CLI::App& app, const GlobalOptions& global) {
       agreed += c.agree ? 1 : 0;
       nlohmann::json row = crosscheck_row(c, case_seed, case_steps);
       row["scenario"] = lc::scenario_to_json(scenario);
+      row["config"] = config;
       if (out.is_open()) out << row.dump() << std::endl;
       std::cerr << row.dump() << "\n";
     };
     if (!replay_path.empty()) {
       std::ifstream in(replay_path);
       std::string line;
+      long long line_number = 0;
       while (std::getline(in, line)) {
+        ++line_number;
         if (line.empty()) continue;
-        const StoredCase c = parse_stored_case(line, seed, steps);
-        run_case(c.index, c.seed, c.steps, &c.reference, c.scenario);
+        const StoredCase c = parse_stored_case(line, line_number, seed, steps);
+        run_case(c.index, c.seed, c.steps, &c.reference, c.scenario, &c.config);
       }
     } else {
       for (long long i = first; i < first + count; ++i) {
-        run_case(static_cast<std::uint64_t>(i), seed, steps, nullptr, std::nullopt);
+        run_case(static_cast<std::uint64_t>(i), seed, steps, nullptr, std::nullopt, nullptr);
       }
     }
     std::cout << agreed << " of " << total << " agree\n";

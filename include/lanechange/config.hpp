@@ -54,8 +54,11 @@ struct SafetyMargins {
 };
 
 enum class LaneRule {
-  EitherOr,   ///< the paper's Eq. 1: the ego is in exactly one lane at a time
-  Footprint,  ///< the ego is in every lane its body touches (safer)
+  /// The paper's Eq. 1 read literally: the ego's centre decides its one lane,
+  /// so optimal plans may drive astride the line (docs/expert.md).
+  EitherOr,
+  /// The ego is in every lane its body touches (the authors' code): the default.
+  Footprint,
 };
 
 enum class JerkWeighting {
@@ -87,7 +90,7 @@ struct ExpertSettings {
   /// and changes objectives by about 1e-6.
   double weight_yaw_rate = 1e-6;
   JerkWeighting jerk_weighting = JerkWeighting::Derivative;
-  LaneRule lane_rule = LaneRule::EitherOr;
+  LaneRule lane_rule = LaneRule::Footprint;
   int max_iterations = 10;             ///< linearization rounds
   double convergence_tolerance = 0.1;  ///< m, largest change of x and y between rounds
   /// m: a round whose solution is this close to the one two rounds back,

@@ -54,6 +54,18 @@ std::string scene_text(const Scenario& s) {
   return out;
 }
 
+// The other cars at node k as the plan saw them: what the action network
+// observes of the traffic while it drives.
+void put_traffic(std::string& out, const TrafficPrediction& others, int k) {
+  for (const Car car : {Car::Leader, Car::Follower, Car::Target}) {
+    const CarTrack& track = others.car(car);
+    const auto at = static_cast<std::size_t>(k);
+    for (const auto* series : {&track.x, &track.v, &track.a}) {
+      put(out, at < series->size() ? (*series)[at] : std::nan(""));
+    }
+  }
+}
+
 void put_samples(std::string& out, std::uint64_t index, const std::string& scene,
                  const PlanOutcome& outcome) {
   const Trajectory& t = outcome.trajectory;
@@ -65,8 +77,20 @@ void put_samples(std::string& out, std::uint64_t index, const std::string& scene
     put(out, t.t[k]);
     out += scene;
     for (double v : {z.x, z.y, z.v, z.theta, t.controls[k].a, t.controls[k].omega}) put(out, v);
+    put_traffic(out, t.others, k);
+    const auto at = static_cast<std::size_t>(k);
+    const int lanes = at < outcome.lane_modes.size() ? outcome.lane_modes[at] : -1;
+    out += ',';
+    if (lanes >= 0) out += std::to_string(lanes);
     out += '\n';
   }
+}
+
+const std::vector<std::string>& traffic_columns() {
+  static const std::vector<std::string> columns = {"leader_x",   "leader_v",   "leader_a",
+                                                   "follower_x", "follower_v", "follower_a",
+                                                   "target_x",   "target_v",   "target_a"};
+  return columns;
 }
 
 }  // namespace
@@ -84,6 +108,9 @@ std::vector<std::string> sample_columns() {
   std::vector<std::string> c = {"index", "k", "label", "t"};
   c.insert(c.end(), scene_columns().begin(), scene_columns().end());
   c.insert(c.end(), {"x", "y", "v", "theta", "a", "omega"});
+  // Format 2 appends; the columns of format 1 keep their places.
+  c.insert(c.end(), traffic_columns().begin(), traffic_columns().end());
+  c.emplace_back("lane_mode");
   return c;
 }
 
@@ -99,7 +126,8 @@ std::vector<std::string> classifier_features() {
 
 std::vector<std::string> action_inputs() {
   std::vector<std::string> c = scene_columns();
-  c.insert(c.end(), {"x", "y", "v", "theta"});
+  c.insert(c.end(), {"t", "x", "y", "v", "theta"});
+  c.insert(c.end(), traffic_columns().begin(), traffic_columns().end());
   return c;
 }
 

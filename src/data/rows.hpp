@@ -21,6 +21,9 @@ struct PlanOutcome {
   int iterations = 0;
   double solve_ms = 0.0;
   Trajectory trajectory;  ///< no nodes when there is no solution
+  /// Lanes the plan lets the ego occupy per node (-1 none, else the
+  /// LaneOccupancy value); as long as the trajectory, or empty.
+  std::vector<int> lane_modes;
 };
 
 /// One scenario's lines in each of a shard's three files.

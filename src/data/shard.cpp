@@ -49,7 +49,12 @@ PlanOutcome plan_outcome(const expert::ExpertPlanner& planner, const Scenario& s
     out.iterations = result.iterations();
     out.solve_ms = result.total_ms;
     // A plan without a solution has no samples to learn from.
-    if (!result.path.states.empty()) out.trajectory = std::move(trajectory);
+    if (!result.path.states.empty()) {
+      out.trajectory = std::move(trajectory);
+      for (const auto& lanes : result.occupancy) {
+        out.lane_modes.push_back(lanes ? static_cast<int>(*lanes) : -1);
+      }
+    }
   } catch (const std::exception& e) {
     // One bad scenario must not end a run of thousands: it becomes a
     // failure row that says what happened.

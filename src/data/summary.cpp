@@ -30,12 +30,14 @@ void check_file(const std::string& dir, const json& entry, bool has_checksum) {
 }
 
 void read_shard(const std::string& dir, const json& shard, detail::ScenarioTally& tally,
-                std::vector<double>& solve_ms) {
+                detail::LineTally& line, std::vector<double>& solve_ms) {
   check_file(dir, shard.at("scenarios"), true);
   check_file(dir, shard.at("samples"), true);
   check_file(dir, shard.at("timing"), false);
   detail::tally_scenarios((fs::path(dir) / shard["scenarios"]["file"].get<std::string>()).string(),
                           tally);
+  detail::tally_line_riding((fs::path(dir) / shard["samples"]["file"].get<std::string>()).string(),
+                            line);
   detail::read_solve_ms((fs::path(dir) / shard["timing"]["file"].get<std::string>()).string(),
                         solve_ms);
 }
@@ -67,9 +69,15 @@ DatasetSummary summarize_dataset(const std::string& dir) {
   }
   DatasetSummary summary;
   detail::ScenarioTally tally;
+  detail::LineTally line;
   try {
     summary.parameters = manifest.at("parameters");
-    for (const json& shard : manifest.at("shards")) read_shard(dir, shard, tally, summary.solve_ms);
+    line.line = summary.parameters.at("config").at("lane_width").get<double>() / 2.0;
+    line.band = summary.line_band;
+    line.duration = summary.line_duration_s;
+    for (const json& shard : manifest.at("shards")) {
+      read_shard(dir, shard, tally, line, summary.solve_ms);
+    }
     summary.shards = static_cast<long long>(manifest.at("shards").size());
     if (tally.rows != summary.parameters.at("count").get<long long>()) {
       throw InputError("", dir + " holds " + std::to_string(tally.rows) +
@@ -83,6 +91,11 @@ DatasetSummary summarize_dataset(const std::string& dir) {
   summary.by_label = tally.by_label;
   summary.by_behavior = tally.by_behavior;
   summary.by_status = tally.by_status;
+  summary.reached = line.reached;
+  summary.riding_line = line.riding;
+  summary.ill_posed = line.ill_posed;
+  summary.ill_posed_riding_line = line.ill_posed_riding;
+  summary.longest_on_line_s = line.longest_s;
   std::sort(summary.solve_ms.begin(), summary.solve_ms.end());
   return summary;
 }
@@ -96,10 +109,16 @@ void print_summary(const DatasetSummary& s, std::ostream& out) {
   print_counts("by label", s.by_label, s.scenarios, out);
   print_counts("by behavior", s.by_behavior, s.scenarios, out);
   print_counts("by plan status", s.by_status, s.scenarios, out);
-  char line[200];
+  char line[320];
   std::snprintf(line, sizeof line, "solve time (ms): p50 %.2f, p90 %.2f, p99 %.2f, max %.2f\n",
                 s.solve_ms_percentile(0.5), s.solve_ms_percentile(0.9), s.solve_ms_percentile(0.99),
                 s.solve_ms_percentile(1.0));
+  out << line;
+  std::snprintf(line, sizeof line,
+                "on the lane line (centre within %.2f m of it for more than %.1f s): %lld of %lld "
+                "plans that reach the target lane, %lld of %lld ill-posed; longest %.1f s\n",
+                s.line_band, s.line_duration_s, s.riding_line, s.reached, s.ill_posed_riding_line,
+                s.ill_posed, s.longest_on_line_s);
   out << line;
 }
 

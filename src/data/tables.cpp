@@ -14,6 +14,9 @@
 #pragma GCC diagnostic pop
 #endif
 
+#include <algorithm>
+#include <cmath>
+
 #include "lanechange/error.hpp"
 
 namespace lanechange::data::detail {
@@ -58,6 +61,62 @@ void read_solve_ms(const std::string& path, std::vector<double>& out) {
     in.read_header(io::ignore_extra_column, "solve_ms");
     double ms = 0.0;
     while (in.read_row(ms)) out.push_back(ms);
+  });
+}
+
+namespace {
+
+// One plan's nodes, in order; closes its stretch into the tally at the end.
+struct PlanStretch {
+  std::string label;
+  double stretch_start = 0.0;
+  bool in_band = false;
+  double longest = 0.0;
+
+  void add(double t, double distance, double band) {
+    if (distance > band) {
+      in_band = false;
+      return;
+    }
+    if (!in_band) stretch_start = t;
+    in_band = true;
+    longest = std::max(longest, t - stretch_start);
+  }
+
+  void close_into(LineTally& tally) const {
+    if (label != "well_posed" && label != "ill_posed") return;
+    const bool riding = longest > tally.duration;
+    ++tally.reached;
+    tally.riding += riding ? 1 : 0;
+    if (label == "ill_posed") {
+      ++tally.ill_posed;
+      tally.ill_posed_riding += riding ? 1 : 0;
+    }
+    tally.longest_s = std::max(tally.longest_s, longest);
+  }
+};
+
+}  // namespace
+
+void tally_line_riding(const std::string& path, LineTally& tally) {
+  guarded(path, [&] {
+    Reader<4> in(path);
+    in.read_header(io::ignore_extra_column, "index", "label", "t", "y");
+    long long index = -1;
+    long long previous = -1;
+    std::string label;
+    double t = 0.0;
+    double y = 0.0;
+    PlanStretch plan;
+    while (in.read_row(index, label, t, y)) {
+      if (index != previous) {
+        if (previous >= 0) plan.close_into(tally);
+        plan = PlanStretch{label};
+        previous = index;
+      }
+      plan.add(t, std::abs(y - tally.line), tally.band);
+    }
+    if (previous >= 0) plan.close_into(tally);
   });
 }
 

@@ -58,6 +58,18 @@ PlanStatus status_of_failed_round(MiqpStatus s) {
   }
 }
 
+std::vector<std::optional<LaneOccupancy>> occupancy_of(const LaneChangeQp& qp,
+                                                       const std::vector<int>& modes) {
+  std::vector<std::optional<LaneOccupancy>> out(modes.size());
+  for (std::size_t k = 0; k < modes.size() && k < qp.node_modes.size(); ++k) {
+    const auto& choices = qp.node_modes[k];
+    if (modes[k] >= 0 && static_cast<std::size_t>(modes[k]) < choices.size()) {
+      out[k] = choices[static_cast<std::size_t>(modes[k])].occupancy;
+    }
+  }
+  return out;
+}
+
 }  // namespace
 
 ExpertResult ExpertPlanner::plan(const Scenario& scenario, const PlanLimits& limits) const {
@@ -113,6 +125,7 @@ ExpertResult ExpertPlanner::plan(const Scenario& scenario, const PlanLimits& lim
     two_back = std::move(result.path);
     result.path = solution.path;
     result.modes = solution.modes;
+    result.occupancy = occupancy_of(qp, solution.modes);
     result.objective = solution.objective;
     point = solution.path;
     if (round > 1 && report.max_change <= config.expert.convergence_tolerance) {

@@ -112,6 +112,88 @@ TEST(Generate, SolvedScenariosGiveNPlusOneSamplesFromTheirInitialScene) {
   EXPECT_GT(solved, 0);
 }
 
+// The traffic columns at node k are the cars as the plan saw them: at k = 0
+// the initial scene; for constant speed, x0 + v0 t. The lane mode says where
+// the body is (footprint rule): wholly in the ego lane (0) or the target lane (2).
+TEST(Generate, SamplesCarryTheTrafficAndTheLaneModePerNode) {
+  TempDir dir;
+  auto o = small_options(dir.path(), 8);
+  o.behavior = Behavior::ConstantSpeed;
+  run(o, 1);
+  const auto samples = testing::read_all(dir.path(), "samples");
+  ASSERT_FALSE(samples.rows.empty());
+  std::set<std::string> modes_seen;
+  const double half_width = o.config.vehicle.width / 2.0;
+  const double line = o.config.lane_width / 2.0;
+  for (const auto& s : samples.rows) {
+    auto value = [&](const char* c) { return std::stod(s[samples.column(c)]); };
+    const double t = value("t");
+    for (const char* car : {"leader", "follower", "target"}) {
+      const std::string name(car);
+      EXPECT_NEAR(value((name + "_x").c_str()),
+                  value((name + "_x0").c_str()) + value((name + "_v0").c_str()) * t, 1e-9);
+      EXPECT_DOUBLE_EQ(value((name + "_v").c_str()), value((name + "_v0").c_str()));
+    }
+    const std::string mode = s[samples.column("lane_mode")];
+    modes_seen.insert(mode);
+    if (s[samples.column("k")] == "0") {
+      EXPECT_EQ(mode, "");
+    }
+    // The mode is the planned (linearised) one; the re-simulated y may differ
+    // from it by centimetres.
+    if (mode == "0") {
+      EXPECT_LT(value("y") + half_width, line + 0.05);
+    }
+    if (mode == "2") {
+      EXPECT_GT(value("y") - half_width, line - 0.05);
+    }
+  }
+  EXPECT_TRUE(modes_seen.count("0") > 0 || modes_seen.count("2") > 0);
+}
+
+// dataset-info's "on the lane line" count, recomputed here from the samples:
+// the longest run of consecutive nodes with the centre within 0.3 m of the
+// line, measured from its first node's time to its last's, above 1 s.
+TEST(Generate, SummaryCountsPlansThatRideTheLaneLine) {
+  TempDir dir;
+  auto o = small_options(dir.path(), 16);
+  o.config.expert.steps = 50;
+  o.config.expert.lane_rule = LaneRule::EitherOr;  // the rule that rides the line
+  run(o, 2);
+  const auto samples = testing::read_all(dir.path(), "samples");
+  std::map<std::string, std::pair<std::string, double>> longest;  // index -> label, seconds
+  std::map<std::string, double> start;
+  const double line = o.config.lane_width / 2.0;
+  for (const auto& s : samples.rows) {
+    const std::string index = s[samples.column("index")];
+    const double t = std::stod(s[samples.column("t")]);
+    auto& entry = longest[index];
+    entry.first = s[samples.column("label")];
+    if (std::abs(std::stod(s[samples.column("y")]) - line) > 0.3) {
+      start.erase(index);
+      continue;
+    }
+    if (!start.count(index)) start[index] = t;
+    entry.second = std::max(entry.second, t - start[index]);
+  }
+  long long reached = 0;
+  long long riding = 0;
+  for (const auto& [index, entry] : longest) {
+    if (entry.first == "failure") continue;
+    ++reached;
+    riding += entry.second > 1.0 ? 1 : 0;
+  }
+  const data::DatasetSummary summary = data::summarize_dataset(dir.path().string());
+  EXPECT_EQ(summary.reached, reached);
+  EXPECT_EQ(summary.riding_line, riding);
+  auto count_of = [&summary](const char* label) {
+    const auto it = summary.by_label.find(label);
+    return it == summary.by_label.end() ? 0LL : it->second;
+  };
+  EXPECT_EQ(summary.reached, count_of("well_posed") + count_of("ill_posed"));
+  EXPECT_GT(reached, 0);
+}
+
 // Throws for fast egos, so a run holds both kinds of rows.
 class ThrowingSolver final : public expert::LaneChangeSolver {
  public:

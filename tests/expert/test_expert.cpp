@@ -61,16 +61,23 @@ TEST(Formulation, LinearizedStepIsExactAtItsOwnPoint) {
 }
 
 TEST(Formulation, MiqpFormHasTheSameObjective) {
-  const Scenario s = ScenarioSampler(Config{}, 4).sample(0);
-  const LaneChangeQp qp = first_round_problem(s, Config{});
-  MiqpLayout layout;
-  const MiqpProblem miqp = to_miqp(qp, 1000.0, layout);
-  ASSERT_TRUE(miqp.check().empty()) << miqp.check();
-  Eigen::VectorXd x = Eigen::VectorXd::Zero(miqp.num_variables());
-  for (int i = 0; i < x.size(); ++i) x[i] = std::sin(1.0 + i);
-  const Iterate path = iterate_from_miqp(x, layout);
-  EXPECT_NEAR(miqp.objective(x), qp.objective(path), 1e-9 * std::abs(qp.objective(path)));
-  EXPECT_EQ(miqp.num_binaries(), 2 * s.steps);  // two modes a node, node 0 excluded
+  for (const LaneRule rule : {LaneRule::EitherOr, LaneRule::Footprint}) {
+    Config config;
+    config.expert.lane_rule = rule;
+    const Scenario s = ScenarioSampler(config, 4).sample(0);
+    const LaneChangeQp qp = first_round_problem(s, config);
+    MiqpLayout layout;
+    const MiqpProblem miqp = to_miqp(qp, 1000.0, layout);
+    ASSERT_TRUE(miqp.check().empty()) << miqp.check();
+    Eigen::VectorXd x = Eigen::VectorXd::Zero(miqp.num_variables());
+    for (int i = 0; i < x.size(); ++i) x[i] = std::sin(1.0 + i);
+    const Iterate path = iterate_from_miqp(x, layout);
+    EXPECT_NEAR(miqp.objective(x), qp.objective(path), 1e-9 * std::abs(qp.objective(path)));
+    // A binary per mode and node, node 0 excluded: two modes under the
+    // either-or rule, three (ego lane, both, target lane) under footprint.
+    const int modes = rule == LaneRule::EitherOr ? 2 : 3;
+    EXPECT_EQ(miqp.num_binaries(), modes * s.steps);
+  }
 }
 
 TEST(Formulation, WarmStartMeetsItsBoundaryConditions) {
@@ -132,10 +139,32 @@ TEST(CrossCheckReplayCli, CatchesAWrongStoredOptimumAndRejectsBadLines) {
   const auto r = testing::run_cli("crosscheck --replay " + dir.file("tampered.jsonl"));
   EXPECT_NE(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("0 of 2 agree"), std::string::npos) << r.output;
+  // A case must carry the config it was made with, and the reference's verdict.
   testing::write_text(dir.file("bad.jsonl"), "{\"index\": 1}\n");
   const auto bad = testing::run_cli("crosscheck --replay " + dir.file("bad.jsonl"));
   EXPECT_EQ(bad.exit_code, 2) << bad.output;
-  EXPECT_NE(bad.output.find("reference_status"), std::string::npos) << bad.output;
+  EXPECT_NE(bad.output.find("config"), std::string::npos) << bad.output;
+  testing::write_text(dir.file("bad2.jsonl"), "{\"index\": 1, \"config\": {}}\n");
+  const auto bad2 = testing::run_cli("crosscheck --replay " + dir.file("bad2.jsonl"));
+  EXPECT_EQ(bad2.exit_code, 2) << bad2.output;
+  EXPECT_NE(bad2.output.find("reference_status"), std::string::npos) << bad2.output;
+}
+
+// A stored case is replayed under its own config: a --config that changes
+// the lane rule does not change what the case checks.
+TEST(CrossCheckReplayCli, UsesTheConfigStoredWithEachCase) {
+  testing::TempDir dir;
+  const std::string cases = dir.file("cases.jsonl");
+  testing::write_text(dir.file("either_or.json"), R"({"expert": {"lane_rule": "either_or"}})");
+  ASSERT_EQ(testing::run_cli("--config " + dir.file("either_or.json") +
+                             " crosscheck --count 2 --seed 3 --steps 6 --out " + cases)
+                .exit_code,
+            0);
+  std::ifstream in(cases);
+  std::string line;
+  ASSERT_TRUE(std::getline(in, line));
+  EXPECT_EQ(nlohmann::json::parse(line)["config"]["expert"]["lane_rule"], "either_or");
+  EXPECT_EQ(testing::run_cli("crosscheck --replay " + cases).exit_code, 0);
 }
 
 INSTANTIATE_TEST_SUITE_P(SampledScenarios, CrossCheck,
@@ -216,6 +245,7 @@ Scenario cycling_scenario() {
 
 TEST(Planner, StopsRoundsThatAlternateBetweenTwoPaths) {
   Config config;
+  config.expert.lane_rule = LaneRule::EitherOr;  // the rule it was found under
   config.expert.cycle_tolerance = 0.0;
   const ExpertPlanner patient(config, std::make_shared<FastLaneChangeSolver>());
   const ExpertResult full = patient.plan(cycling_scenario());

@@ -38,7 +38,7 @@ TEST(Config, PaperDefaultsFollowNotes) {
   EXPECT_DOUBLE_EQ(c.expert.weight_accel, 0.5);
   EXPECT_DOUBLE_EQ(c.expert.weight_jerk, 100.0);
   EXPECT_DOUBLE_EQ(c.expert.weight_lateral, 1.0);
-  EXPECT_EQ(c.expert.lane_rule, LaneRule::EitherOr);
+  EXPECT_EQ(c.expert.lane_rule, LaneRule::Footprint);  // NOTES.md: the body decides
   EXPECT_DOUBLE_EQ(c.lane_width, 3.75);
   EXPECT_NEAR(c.limits.v.hi, 60.0 / 3.6, 1e-12);
 }

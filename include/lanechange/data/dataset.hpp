@@ -18,7 +18,7 @@
 
 namespace lanechange::data {
 
-inline constexpr std::string_view kDatasetFormat = "lanechange.dataset/1";
+inline constexpr std::string_view kDatasetFormat = "lanechange.dataset/2";
 inline constexpr std::string_view kManifestName = "manifest.json";
 
 /// Everything that fixes a data set's content. Two runs with equal options
@@ -88,6 +88,15 @@ struct DatasetSummary {
   std::map<std::string, long long> by_behavior;
   std::map<std::string, long long> by_status;
   std::vector<double> solve_ms;  ///< sorted
+  /// Plans that keep the ego's centre within `line_band` of the lane line
+  /// for longer than `line_duration_s` (docs/expert.md, "Lane rule").
+  double line_band = 0.3;        ///< m
+  double line_duration_s = 1.0;  ///< s
+  long long reached = 0;         ///< plans that reach the target lane
+  long long riding_line = 0;     ///< of those, how many ride the line
+  long long ill_posed = 0;
+  long long ill_posed_riding_line = 0;
+  double longest_on_line_s = 0.0;
   /// Nearest-rank percentile of the solve times (q in [0, 1]).
   [[nodiscard]] double solve_ms_percentile(double q) const;
 };

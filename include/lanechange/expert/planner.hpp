@@ -5,6 +5,7 @@
 // It stops when the largest change of x and y between two rounds' solutions is
 // within the tolerance, or at the round limit.
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -38,9 +39,13 @@ struct RoundReport {
 
 struct ExpertResult {
   PlanStatus status = PlanStatus::SolverError;
-  std::string reason;            ///< in words, for anything but Converged
-  Iterate path;                  ///< the last round's solution (empty if none)
-  std::vector<int> modes;        ///< lane mode per node of the last solution
+  std::string reason;      ///< in words, for anything but Converged
+  Iterate path;            ///< the last round's solution (empty if none)
+  std::vector<int> modes;  ///< lane mode per node of the last solution
+  /// What those modes mean: the lanes the ego may occupy at each node
+  /// (nullopt where no lane rule applies, as at t = 0). It is the integer
+  /// part of the plan, in words that do not depend on the formulation.
+  std::vector<std::optional<LaneOccupancy>> occupancy;
   TrafficPrediction prediction;  ///< the cars as the last round saw them
   double objective = kInfinity;  ///< of the last round's MIQP
   std::vector<RoundReport> rounds;
