@@ -17,6 +17,8 @@ namespace {
 
 using nlohmann::json;
 
+constexpr std::uint64_t kOpenCvSeed = 0x5eed;
+
 cv::Mat to_cv(const Eigen::MatrixXd& x) {
   cv::Mat m(static_cast<int>(x.rows()), static_cast<int>(x.cols()), CV_32F);
   for (int r = 0; r < m.rows; ++r) {
@@ -59,6 +61,10 @@ class OpenCvClassifier : public Classifier {
  public:
   explicit OpenCvClassifier(cv::Ptr<Model> model) : model_(std::move(model)) {}
   void fit(const Eigen::MatrixXd& x, const std::vector<int>& y) override {
+    // RTrees draws its bootstrap samples and feature subsets from the
+    // calling thread's cv::theRNG(), whose state depends on what that thread
+    // ran before: reseeding it makes every fit repeatable.
+    cv::theRNG() = cv::RNG(kOpenCvSeed);
     require_trained(model_->train(train_data(x, y)), "an OpenCV model");
   }
   [[nodiscard]] std::vector<int> predict(const Eigen::MatrixXd& x) const override {

@@ -217,13 +217,8 @@ Split split_scenarios(int n, double test_share, std::uint64_t seed) {
   }
   std::vector<int> order(static_cast<std::size_t>(n));
   for (int i = 0; i < n; ++i) order[static_cast<std::size_t>(i)] = i;
-  // Fisher-Yates with our own draw: std::shuffle and the std distributions
-  // differ between standard libraries, and the split must not.
   std::mt19937_64 rng(seed);
-  for (std::size_t i = order.size(); i > 1; --i) {
-    const std::size_t j = static_cast<std::size_t>(rng() % i);
-    std::swap(order[i - 1], order[j]);
-  }
+  seeded_shuffle(order, rng);
   const auto n_test = static_cast<std::size_t>(std::lround(test_share * n));
   Split split;
   split.test.assign(order.begin(), order.begin() + static_cast<std::ptrdiff_t>(n_test));
@@ -234,6 +229,12 @@ Split split_scenarios(int n, double test_share, std::uint64_t seed) {
     throw InputError("--test-share", "leaves one side of the split empty");
   }
   return split;
+}
+
+void seeded_shuffle(std::vector<int>& values, std::mt19937_64& rng) {
+  for (std::size_t i = values.size(); i > 1; --i) {
+    std::swap(values[i - 1], values[static_cast<std::size_t>(rng() % i)]);
+  }
 }
 
 std::vector<char> mask_of(const std::vector<int>& rows, int n) {

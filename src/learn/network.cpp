@@ -8,6 +8,8 @@
 #include <cstdlib>
 #include <random>
 
+#include "lanechange/learn/learn_data.hpp"
+
 namespace lanechange::learn {
 
 namespace {
@@ -124,9 +126,7 @@ TrainedNetwork train_network(const Eigen::MatrixXd& x, const Eigen::MatrixXd& y,
   std::vector<int> order = train;
   double best = std::numeric_limits<double>::infinity();
   for (int epoch = 1; epoch <= s.max_epochs && epoch - result.best_epoch <= s.patience; ++epoch) {
-    for (std::size_t i = order.size(); i > 1; --i) {
-      std::swap(order[i - 1], order[static_cast<std::size_t>(rng() % i)]);
-    }
+    seeded_shuffle(order, rng);
     for (std::size_t begin = 0; begin < order.size();
          begin += static_cast<std::size_t>(s.batch_size)) {
       const std::vector<int> batch(

@@ -7,6 +7,7 @@
 #include <thread>
 
 #include "lanechange/learn/evaluation.hpp"
+#include "lanechange/learn/learn_data.hpp"
 
 namespace lanechange::learn {
 
@@ -61,9 +62,7 @@ std::vector<std::vector<int>> make_folds(int n, int k, std::uint64_t seed) {
   std::vector<int> order(static_cast<std::size_t>(n));
   for (int i = 0; i < n; ++i) order[static_cast<std::size_t>(i)] = i;
   std::mt19937_64 rng(seed);
-  for (std::size_t i = order.size(); i > 1; --i) {
-    std::swap(order[i - 1], order[static_cast<std::size_t>(rng() % i)]);
-  }
+  seeded_shuffle(order, rng);
   std::vector<std::vector<int>> folds(static_cast<std::size_t>(std::max(k, 1)));
   for (std::size_t i = 0; i < order.size(); ++i) folds[i % folds.size()].push_back(order[i]);
   return folds;

@@ -7,6 +7,7 @@
 #include <array>
 #include <cstdint>
 #include <nlohmann/json.hpp>
+#include <random>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -74,6 +75,10 @@ struct Split {
 /// A seeded split of n scenarios: round(test_share n) go to the test side.
 /// The same (n, share, seed) gives the same split on every platform.
 [[nodiscard]] Split split_scenarios(int n, double test_share, std::uint64_t seed);
+
+/// Fisher-Yates with our own draw: std::shuffle and the std distributions
+/// differ between standard libraries, and splits and folds must not.
+void seeded_shuffle(std::vector<int>& values, std::mt19937_64& rng);
 
 /// The sample rows whose scenario is on the given side (`member[s]`).
 [[nodiscard]] std::vector<int> sample_rows_of(const SampleTable& samples,
