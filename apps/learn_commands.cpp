@@ -3,6 +3,7 @@
 
 #include <iostream>
 
+#include "lanechange/learn/model.hpp"
 #include "lanechange/learn/train.hpp"
 
 namespace lanechange::app {
@@ -20,6 +21,18 @@ struct TrainArgs {
   bool quick = false;
   bool no_plots = false;
 };
+
+// The test accuracies of a loaded model, one line per classifier.
+void print_model(const learn::Model& model, const std::string& dir) {
+  const nlohmann::json& d = model.description();
+  std::cout << dir << ": " << d.at("format").get<std::string>() << ", "
+            << d.at("data").at("scenarios") << " scenarios from "
+            << d.at("data").at("datasets").size() << " data set(s), policy with "
+            << model.policy().inputs() << " inputs; every file's checksum verified\n";
+  for (const auto& [name, m] : model.metrics().at("classifiers").items()) {
+    std::cout << "  " << name << ": test accuracy " << m.at("test_accuracy").get<double>() << "\n";
+  }
+}
 
 void run_train(const TrainArgs& a) {
   learn::TrainOptions o;
@@ -57,6 +70,13 @@ void add_train(CLI::App& app) {
   cmd->add_flag("--quick", args.quick, "Smaller hyperparameter grids (tests, smoke runs)");
   cmd->add_flag("--no-plots", args.no_plots, "Skip the PNGs (no gnuplot needed)");
   cmd->callback([] { run_train(args); });
+}
+
+void add_model_info(CLI::App& app) {
+  auto* cmd = app.add_subcommand("model-info", "Load a trained model (checks it) and summarise it");
+  static std::string dir;
+  cmd->add_option("dir", dir, "Model directory")->required();
+  cmd->callback([] { print_model(learn::Model::load(dir), dir); });
 }
 
 }  // namespace lanechange::app

@@ -3,7 +3,8 @@
 
 namespace lanechange::app {
 
-/// `train` (docs/learning.md).
+/// `train` and `model-info` (docs/learning.md).
 void add_train(CLI::App& app);
+void add_model_info(CLI::App& app);
 
 }  // namespace lanechange::app

@@ -353,6 +353,7 @@ int main(int argc, char** argv) {
   lc::app::add_generate(app, [&global] { return global.config(); });
   lc::app::add_dataset_info(app);
   lc::app::add_train(app);
+  lc::app::add_model_info(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {

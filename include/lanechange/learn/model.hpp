@@ -45,9 +45,12 @@ class Model {
                                           const Eigen::MatrixXd& raw) const;
   [[nodiscard]] const Policy& policy() const { return *policy_; }
   [[nodiscard]] const nlohmann::json& description() const { return description_; }
+  /// metrics.json as written by train_models.
+  [[nodiscard]] const nlohmann::json& metrics() const { return metrics_; }
 
  private:
   nlohmann::json description_;
+  nlohmann::json metrics_;
   std::map<std::pair<FeatureSet, ClassifierKind>, std::unique_ptr<Classifier>> classifiers_;
   std::map<FeatureSet, Standardizer> standardizers_;
   std::shared_ptr<const Policy> policy_;
