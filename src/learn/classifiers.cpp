@@ -269,7 +269,7 @@ std::vector<json> hyperparameter_grid(ClassifierKind kind, const SearchSettings&
     case ClassifierKind::NaiveBayes:
       if (!s.naive_bayes_kernel) return {{{"kernel", false}}};
       for (double scale :
-           s.quick ? std::vector<double>{0.5, 1.0} : std::vector<double>{0.25, 0.5, 1.0, 2.0}) {
+           s.quick ? std::vector<double>{0.5, 1.0} : std::vector<double>{0.25, 0.5, 1.0, 2.0, 4.0}) {
         grid.push_back({{"kernel", true}, {"bandwidth_scale", scale}});
       }
       break;
