@@ -329,7 +329,8 @@ TrainReport train_models(const TrainOptions& options) {
   check_out_dir(options.out_dir);
   const LearningData data = load_learning_data(options.data_dirs);
   const Split split = split_scenarios(data.scenarios.rows(), options.test_share, options.seed);
-  const fs::path out = fs::path(options.out_dir).lexically_normal();
+  fs::path out = fs::path(options.out_dir).lexically_normal();
+  if (out.filename().empty()) out = out.parent_path();  // "model/": the staging dir is a sibling
   const fs::path staging = out.string() + ".tmp." + std::to_string(::getpid());
   fs::remove_all(staging);
   fs::create_directories(staging);
