@@ -268,14 +268,14 @@ std::vector<json> hyperparameter_grid(ClassifierKind kind, const SearchSettings&
       break;
     case ClassifierKind::NaiveBayes:
       if (!s.naive_bayes_kernel) return {{{"kernel", false}}};
-      for (double scale :
-           s.quick ? std::vector<double>{0.5, 1.0} : std::vector<double>{0.25, 0.5, 1.0, 2.0, 4.0}) {
+      for (double scale : s.quick ? std::vector<double>{0.5, 1.0}
+                                  : std::vector<double>{0.25, 0.5, 1.0, 2.0, 4.0}) {
         grid.push_back({{"kernel", true}, {"bandwidth_scale", scale}});
       }
       break;
     case ClassifierKind::Svm:
-      for (double c :
-           s.quick ? std::vector<double>{1.0, 10.0} : std::vector<double>{0.1, 1.0, 10.0, 100.0}) {
+      for (double c : s.quick ? std::vector<double>{1.0, 10.0}
+                              : std::vector<double>{0.1, 1.0, 10.0, 100.0, 1000.0}) {
         grid.push_back({{"C", c}, {"gamma_factor", 1.0}});
       }
       break;
