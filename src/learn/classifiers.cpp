@@ -274,8 +274,8 @@ std::vector<json> hyperparameter_grid(ClassifierKind kind, const SearchSettings&
       }
       break;
     case ClassifierKind::Svm:
-      for (double c : s.quick ? std::vector<double>{1.0, 10.0}
-                              : std::vector<double>{0.1, 1.0, 10.0, 100.0, 1000.0}) {
+      for (double c :
+           s.quick ? std::vector<double>{1.0, 10.0} : std::vector<double>{0.1, 1.0, 10.0, 100.0}) {
         grid.push_back({{"C", c}, {"gamma_factor", 1.0}});
       }
       break;
