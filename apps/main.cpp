@@ -19,6 +19,7 @@
 #include "lanechange/sampler.hpp"
 #include "lanechange/scenario.hpp"
 #include "sim_commands.hpp"
+#include "learn_commands.hpp"
 
 namespace lc = lanechange;
 
@@ -354,6 +355,8 @@ int main(int argc, char** argv) {
   lc::app::add_dataset_info(app);
   lc::app::add_simulate(app, [&global] { return global.config(); });
   lc::app::add_evaluate(app, [&global] { return global.config(); });
+  lc::app::add_train(app);
+  lc::app::add_model_info(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {

@@ -5,7 +5,9 @@
 // gnuplot (5.4 or later, with the pngcairo terminal: Debian's gnuplot-nox) is
 // found at run time: $LANECHANGE_GNUPLOT if set and not empty, else `gnuplot`
 // on PATH, else the one found when the project was configured.
+#include <functional>
 #include <string>
+#include <string_view>
 
 #include "lanechange/config.hpp"
 #include "lanechange/trajectory.hpp"
@@ -32,5 +34,14 @@ void plot_trajectory(const Trajectory& trajectory, const std::string& png_path,
 [[nodiscard]] std::string trajectory_plot_script(const Trajectory& trajectory,
                                                  const std::string& png_path,
                                                  const PlotOptions& options = {});
+
+/// Runs the gnuplot script that script_for(png) makes for a PNG at the given
+/// path, and moves the picture to png_path atomically; errors as
+/// plot_trajectory's. The script must set the pngcairo terminal and output.
+void render_png(const std::function<std::string(const std::string&)>& script_for,
+                const std::string& png_path);
+
+/// text as a single-quoted gnuplot string.
+[[nodiscard]] std::string gnuplot_quoted(std::string_view text);
 
 }  // namespace lanechange

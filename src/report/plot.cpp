@@ -476,10 +476,17 @@ std::string trajectory_plot_script(const Trajectory& trajectory, const std::stri
 
 void plot_trajectory(const Trajectory& trajectory, const std::string& png_path,
                      const PlotOptions& options) {
+  render_png(
+      [&](const std::string& image) { return trajectory_plot_script(trajectory, image, options); },
+      png_path);
+}
+
+void render_png(const std::function<std::string(const std::string&)>& script_for,
+                const std::string& png_path) {
   require(!png_path.empty(), "png_path", "must not be empty");
   // The PNG is drawn next to its destination, so the final rename is atomic.
   TempFile image(png_path + ".tmp.", 0666, png_path);
-  const std::string script_text = trajectory_plot_script(trajectory, image.path(), options);
+  const std::string script_text = script_for(image.path());
   const std::string gnuplot = find_gnuplot();
   const std::string temp_dir = std::filesystem::temp_directory_path().string();
   TempFile script(temp_dir + "/lanechange_plot_", 0600, "a gnuplot script in " + temp_dir);
@@ -495,5 +502,7 @@ void plot_trajectory(const Trajectory& trajectory, const std::string& png_path,
   std::filesystem::rename(image.path(), png_path);
   image.release();
 }
+
+std::string gnuplot_quoted(std::string_view text) { return gnuplot_string(text); }
 
 }  // namespace lanechange

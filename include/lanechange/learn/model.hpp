@@ -1,0 +1,59 @@
+#pragma once
+// A trained model directory (docs/learning.md): the classifiers with and
+// without the behavior input, the action network's policy, normalisation,
+// feature lists, split, seeds, data-set identities, config and metrics.
+// model.json lists every file with its CRC-32, so a damaged file is found
+// at load time; a model that does not fit the caller is refused.
+#include <Eigen/Dense>
+#include <map>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "lanechange/learn/classifier.hpp"
+#include "lanechange/learn/policy.hpp"
+
+namespace lanechange::learn {
+
+inline constexpr std::string_view kModelFormat = "lanechange.model/1";
+inline constexpr std::string_view kModelFile = "model.json";
+
+/// The classifier sets in a model: without and with the behavior one-hot.
+enum class FeatureSet { Plain, WithBehavior };
+[[nodiscard]] std::string_view feature_set_name(FeatureSet set);
+
+/// What the caller will feed the model; a model that does not fit is refused
+/// (InputError). Empty fields are not checked.
+struct ModelRequirements {
+  std::vector<std::string> classifier_features;  ///< the 13 raw features, in order
+  std::vector<std::string> action_inputs;
+  std::optional<nlohmann::json> expert_config;  ///< the config the data came from
+};
+
+class Model {
+ public:
+  /// Reads dir, verifying the format, every file's checksum and the
+  /// requirements. InputError on any mismatch or damage.
+  static Model load(const std::string& dir, const ModelRequirements& requirements = {});
+
+  /// Classes of raw (unstandardised) rows: the classifier features, followed
+  /// by the behavior one-hot for FeatureSet::WithBehavior.
+  [[nodiscard]] std::vector<int> classify(ClassifierKind kind, FeatureSet set,
+                                          const Eigen::MatrixXd& raw) const;
+  [[nodiscard]] const Policy& policy() const { return *policy_; }
+  [[nodiscard]] const nlohmann::json& description() const { return description_; }
+  /// metrics.json as written by train_models.
+  [[nodiscard]] const nlohmann::json& metrics() const { return metrics_; }
+
+ private:
+  nlohmann::json description_;
+  nlohmann::json metrics_;
+  std::map<std::pair<FeatureSet, ClassifierKind>, std::unique_ptr<Classifier>> classifiers_;
+  std::map<FeatureSet, Standardizer> standardizers_;
+  std::shared_ptr<const Policy> policy_;
+};
+
+}  // namespace lanechange::learn

@@ -1,0 +1,277 @@
+#include "lanechange/learn/learn_data.hpp"
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <unordered_map>
+
+#include "data/manifest.hpp"
+#include "lanechange/data/dataset.hpp"
+#include "lanechange/error.hpp"
+
+namespace lanechange::learn {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+// Our CSV files quote only their last column (`reason`), so a line splits on
+// its first columns-1 commas.
+std::vector<std::string_view> split_fields(std::string_view line, std::size_t columns) {
+  std::vector<std::string_view> out;
+  while (out.size() + 1 < columns) {
+    const std::size_t comma = line.find(',');
+    if (comma == std::string_view::npos) break;
+    out.push_back(line.substr(0, comma));
+    line.remove_prefix(comma + 1);
+  }
+  out.push_back(line);
+  return out;
+}
+
+// A CSV file read line by line, its columns found by name.
+class CsvFile {
+ public:
+  explicit CsvFile(std::string path) : path_(std::move(path)), in_(path_) {
+    std::string header;
+    if (!in_ || !std::getline(in_, header)) throw InputError("", path_ + " cannot be read");
+    for (std::string_view f : split_fields(header, std::string::npos)) header_.emplace_back(f);
+  }
+  [[nodiscard]] std::size_t column(const std::string& name) const {
+    const auto it = std::find(header_.begin(), header_.end(), name);
+    if (it == header_.end()) throw InputError("", path_ + " has no column " + name);
+    return static_cast<std::size_t>(it - header_.begin());
+  }
+  [[nodiscard]] std::vector<std::size_t> columns(const std::vector<std::string>& names) const {
+    std::vector<std::size_t> out;
+    for (const std::string& n : names) out.push_back(column(n));
+    return out;
+  }
+  bool next(std::vector<std::string_view>& fields) {
+    if (!std::getline(in_, line_)) return false;
+    fields = split_fields(line_, header_.size());
+    if (fields.size() != header_.size()) throw InputError("", path_ + " has a short row");
+    return true;
+  }
+  [[nodiscard]] double number(std::string_view field) const {
+    double value = NAN;
+    const auto [end, error] = std::from_chars(field.data(), field.data() + field.size(), value);
+    if (error != std::errc() || end != field.data() + field.size() || !std::isfinite(value)) {
+      throw InputError("", path_ + " holds a missing or bad number '" + std::string(field) + "'");
+    }
+    return value;
+  }
+  [[nodiscard]] const std::string& path() const { return path_; }
+
+ private:
+  std::string path_;
+  std::ifstream in_;
+  std::vector<std::string> header_;
+  std::string line_;
+};
+
+template <std::size_t N>
+int index_in(const std::array<std::string_view, N>& names, std::string_view value,
+             const std::string& where) {
+  for (std::size_t i = 0; i < N; ++i) {
+    if (names[i] == value) return static_cast<int>(i);
+  }
+  throw InputError("", where + " holds an unknown value '" + std::string(value) + "'");
+}
+
+std::vector<std::string> names_at(const json& columns, const char* key, const std::string& dir) {
+  if (!columns.contains(key)) throw InputError("", dir + "/manifest.json lists no " + key);
+  return columns.at(key).get<std::vector<std::string>>();
+}
+
+// Growable row-major buffers, turned into matrices once all files are read.
+struct Rows {
+  std::vector<double> values;
+  std::size_t width = 0;
+  [[nodiscard]] Eigen::MatrixXd matrix() const {
+    const auto n = static_cast<Eigen::Index>(width == 0 ? 0 : values.size() / width);
+    return Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
+        values.data(), n, static_cast<Eigen::Index>(width));
+  }
+};
+
+struct Loader {
+  LearningData& data;
+  Rows features, inputs, targets;
+  // Per data set: scenario index -> row of the scenario table.
+  std::vector<int> row_of_index;
+
+  void read_scenarios(const std::string& path, int dataset) {
+    CsvFile csv(path);
+    const auto cols = csv.columns(data.classifier_features);
+    const std::size_t c_index = csv.column("index"), c_label = csv.column("label"),
+                      c_behavior = csv.column("behavior");
+    std::vector<std::string_view> f;
+    while (csv.next(f)) {
+      for (std::size_t c : cols) features.values.push_back(csv.number(f[c]));
+      ScenarioTable& t = data.scenarios;
+      const auto index = static_cast<long long>(csv.number(f[c_index]));
+      if (index < 0 || index >= static_cast<long long>(row_of_index.size())) {
+        throw InputError("", path + " holds a scenario index outside the data set");
+      }
+      row_of_index[static_cast<std::size_t>(index)] = t.rows();
+      t.index.push_back(index);
+      t.dataset.push_back(dataset);
+      t.label.push_back(index_in(kLabelNames, f[c_label], path));
+      t.behavior.push_back(index_in(kBehaviorNames, f[c_behavior], path));
+    }
+  }
+
+  void read_samples(const std::string& path) {
+    CsvFile csv(path);
+    const auto in_cols = csv.columns(data.action_inputs);
+    const auto out_cols = csv.columns(data.action_targets);
+    const std::size_t c_index = csv.column("index"), c_label = csv.column("label");
+    std::vector<std::string_view> f;
+    while (csv.next(f)) {
+      if (f[c_label] != kLabelNames[kWellPosed]) continue;
+      const auto index = static_cast<long long>(csv.number(f[c_index]));
+      if (index < 0 || index >= static_cast<long long>(row_of_index.size()) ||
+          row_of_index[static_cast<std::size_t>(index)] < 0) {
+        throw InputError("", path + " holds a sample of an unknown scenario");
+      }
+      for (std::size_t c : in_cols) inputs.values.push_back(csv.number(f[c]));
+      for (std::size_t c : out_cols) targets.values.push_back(csv.number(f[c]));
+      data.samples.scenario.push_back(row_of_index[static_cast<std::size_t>(index)]);
+    }
+  }
+
+  void read_dataset(const std::string& dir, const json& manifest, int dataset) {
+    const long long count = manifest.at("parameters").at("count").get<long long>();
+    row_of_index.assign(static_cast<std::size_t>(count), -1);
+    for (const json& shard : manifest.at("shards")) {
+      read_scenarios((fs::path(dir) / shard.at("scenarios").at("file").get<std::string>()).string(),
+                     dataset);
+    }
+    for (const json& shard : manifest.at("shards")) {
+      read_samples((fs::path(dir) / shard.at("samples").at("file").get<std::string>()).string());
+    }
+  }
+};
+
+// The first data set fixes the columns and config; the others must agree.
+void adopt_or_compare(LearningData& data, const json& manifest, const std::string& dir) {
+  const json& columns = manifest.at("columns");
+  const auto features = names_at(columns, "classifier_features", dir);
+  const auto inputs = names_at(columns, "action_inputs", dir);
+  const auto targets = names_at(columns, "action_targets", dir);
+  const json& config = manifest.at("parameters").at("config");
+  const std::string format = manifest.at("format").get<std::string>();
+  if (data.datasets.empty()) {
+    data.classifier_features = features;
+    data.action_inputs = inputs;
+    data.action_targets = targets;
+    data.config = config;
+    data.dataset_format = format;
+    return;
+  }
+  if (features != data.classifier_features || inputs != data.action_inputs ||
+      targets != data.action_targets || format != data.dataset_format) {
+    throw InputError("", dir + " has other columns or format than " + data.datasets[0].dir);
+  }
+  if (config != data.config) {
+    throw InputError("", dir + " was made with another expert config than " + data.datasets[0].dir);
+  }
+}
+
+}  // namespace
+
+LearningData load_learning_data(const std::vector<std::string>& dirs) {
+  if (dirs.empty()) throw InputError("--data", "at least one data set is needed");
+  LearningData data;
+  Loader loader{data, {}, {}, {}, {}};
+  for (const std::string& dir : dirs) {
+    const data::DatasetSummary summary = data::summarize_dataset(dir);  // checks checksums
+    const json manifest = data::detail::read_manifest(dir);
+    try {
+      adopt_or_compare(data, manifest, dir);
+      loader.features.width = data.classifier_features.size();
+      loader.inputs.width = data.action_inputs.size();
+      loader.targets.width = data.action_targets.size();
+      loader.read_dataset(dir, manifest, static_cast<int>(data.datasets.size()));
+    } catch (const json::exception& e) {
+      throw InputError("", dir + "/manifest.json is malformed (" + e.what() + ")");
+    }
+    data.datasets.push_back(
+        {dir, data::detail::file_crc32((fs::path(dir) / "manifest.json").string()),
+         summary.scenarios, manifest["parameters"].value("seed", std::uint64_t{0})});
+  }
+  data.scenarios.features = loader.features.matrix();
+  data.samples.inputs = loader.inputs.matrix();
+  data.samples.targets = loader.targets.matrix();
+  return data;
+}
+
+Split split_scenarios(int n, double test_share, std::uint64_t seed) {
+  if (!(test_share > 0.0 && test_share < 1.0)) {
+    throw InputError("--test-share", "must lie strictly between 0 and 1");
+  }
+  std::vector<int> order(static_cast<std::size_t>(n));
+  for (int i = 0; i < n; ++i) order[static_cast<std::size_t>(i)] = i;
+  std::mt19937_64 rng(seed);
+  seeded_shuffle(order, rng);
+  const auto n_test = static_cast<std::size_t>(std::lround(test_share * n));
+  Split split;
+  split.test.assign(order.begin(), order.begin() + static_cast<std::ptrdiff_t>(n_test));
+  split.train.assign(order.begin() + static_cast<std::ptrdiff_t>(n_test), order.end());
+  std::sort(split.test.begin(), split.test.end());
+  std::sort(split.train.begin(), split.train.end());
+  if (split.test.empty() || split.train.empty()) {
+    throw InputError("--test-share", "leaves one side of the split empty");
+  }
+  return split;
+}
+
+void seeded_shuffle(std::vector<int>& values, std::mt19937_64& rng) {
+  for (std::size_t i = values.size(); i > 1; --i) {
+    std::swap(values[i - 1], values[static_cast<std::size_t>(rng() % i)]);
+  }
+}
+
+std::vector<char> mask_of(const std::vector<int>& rows, int n) {
+  std::vector<char> mask(static_cast<std::size_t>(n), 0);
+  for (int r : rows) mask[static_cast<std::size_t>(r)] = 1;
+  return mask;
+}
+
+std::vector<int> sample_rows_of(const SampleTable& samples, const std::vector<char>& member) {
+  std::vector<int> rows;
+  for (int r = 0; r < samples.rows(); ++r) {
+    if (member[static_cast<std::size_t>(samples.scenario[static_cast<std::size_t>(r)])]) {
+      rows.push_back(r);
+    }
+  }
+  return rows;
+}
+
+Eigen::MatrixXd classifier_inputs(const ScenarioTable& table, const std::vector<int>& rows,
+                                  bool with_behavior) {
+  const auto n = static_cast<Eigen::Index>(rows.size());
+  const Eigen::Index f = table.features.cols();
+  Eigen::MatrixXd x = Eigen::MatrixXd::Zero(n, f + (with_behavior ? kBehaviors : 0));
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const int r = rows[static_cast<std::size_t>(i)];
+    x.row(i).head(f) = table.features.row(r);
+    if (with_behavior) x(i, f + table.behavior[static_cast<std::size_t>(r)]) = 1.0;
+  }
+  return x;
+}
+
+std::vector<std::string> classifier_input_names(const LearningData& data, bool with_behavior) {
+  std::vector<std::string> names = data.classifier_features;
+  if (with_behavior) {
+    for (std::string_view b : kBehaviorNames) names.push_back("behavior_" + std::string(b));
+  }
+  return names;
+}
+
+}  // namespace lanechange::learn

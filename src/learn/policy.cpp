@@ -1,0 +1,115 @@
+#include "lanechange/learn/policy.hpp"
+
+#include "lanechange/error.hpp"
+
+namespace lanechange::learn {
+
+namespace {
+
+using nlohmann::json;
+
+std::vector<double> to_vector(const Eigen::VectorXd& v) { return {v.begin(), v.end()}; }
+
+Eigen::VectorXd vector_at(const json& j, const char* key) {
+  const auto v = j.at(key).get<std::vector<double>>();
+  return Eigen::Map<const Eigen::VectorXd>(v.data(), static_cast<Eigen::Index>(v.size()));
+}
+
+void require_shape(bool ok, const std::string& what) {
+  if (!ok) throw InputError("network", what + " does not fit the 10x10 tanh network");
+}
+
+}  // namespace
+
+json PolicyWeights::to_json() const {
+  json layers = json::array();
+  for (std::size_t l = 0; l < weights.size(); ++l) {
+    const Eigen::MatrixXf& w = weights[l];
+    json rows = json::array();
+    for (Eigen::Index r = 0; r < w.rows(); ++r) {
+      rows.push_back(std::vector<float>(w.row(r).begin(), w.row(r).end()));
+    }
+    layers.push_back(
+        {{"weights", rows}, {"bias", std::vector<float>(biases[l].begin(), biases[l].end())}});
+  }
+  return {{"inputs", inputs},
+          {"outputs", outputs},
+          {"input_mean", to_vector(input_mean)},
+          {"input_scale", to_vector(input_scale)},
+          {"output_mean", to_vector(output_mean)},
+          {"output_scale", to_vector(output_scale)},
+          {"layers", layers}};
+}
+
+PolicyWeights PolicyWeights::from_json(const json& j) {
+  PolicyWeights p;
+  p.inputs = j.at("inputs").get<std::vector<std::string>>();
+  p.outputs = j.at("outputs").get<std::vector<std::string>>();
+  p.input_mean = vector_at(j, "input_mean");
+  p.input_scale = vector_at(j, "input_scale");
+  p.output_mean = vector_at(j, "output_mean");
+  p.output_scale = vector_at(j, "output_scale");
+  for (const json& layer : j.at("layers")) {
+    const auto rows = layer.at("weights").get<std::vector<std::vector<float>>>();
+    const auto cols = rows.empty() ? 0 : rows[0].size();
+    Eigen::MatrixXf w(static_cast<Eigen::Index>(rows.size()), static_cast<Eigen::Index>(cols));
+    for (std::size_t r = 0; r < rows.size(); ++r) {
+      require_shape(rows[r].size() == cols, "a ragged weight matrix");
+      for (std::size_t c = 0; c < cols; ++c) {
+        w(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(c)) = rows[r][c];
+      }
+    }
+    const auto b = layer.at("bias").get<std::vector<float>>();
+    p.weights.push_back(w);
+    p.biases.push_back(
+        Eigen::Map<const Eigen::VectorXf>(b.data(), static_cast<Eigen::Index>(b.size())));
+  }
+  return p;
+}
+
+Policy::Policy(const PolicyWeights& p) {
+  const auto n = static_cast<Eigen::Index>(p.inputs.size());
+  require_shape(n > 0 && n <= kMaxPolicyInputs && p.input_mean.size() == n &&
+                    p.input_scale.size() == n && p.output_mean.size() == kActions &&
+                    p.output_scale.size() == kActions,
+                "the normalisation");
+  require_shape(p.weights.size() == kHiddenLayers + 1 && p.biases.size() == kHiddenLayers + 1,
+                "the layer count");
+  for (int l = 0; l <= kHiddenLayers; ++l) {
+    const auto& w = p.weights[static_cast<std::size_t>(l)];
+    const Eigen::Index rows = l == kHiddenLayers ? kActions : kHiddenWidth;
+    const Eigen::Index cols = l == 0 ? n : kHiddenWidth;
+    require_shape(w.rows() == rows && w.cols() == cols &&
+                      p.biases[static_cast<std::size_t>(l)].size() == rows,
+                  "layer " + std::to_string(l));
+  }
+  first_ = p.weights[0];
+  for (int l = 1; l < kHiddenLayers; ++l)
+    hidden_[static_cast<std::size_t>(l - 1)] = p.weights[static_cast<std::size_t>(l)];
+  for (int l = 0; l < kHiddenLayers; ++l)
+    bias_[static_cast<std::size_t>(l)] = p.biases[static_cast<std::size_t>(l)];
+  last_ = p.weights[kHiddenLayers];
+  last_bias_ = p.biases[kHiddenLayers];
+  in_mean_ = p.input_mean;
+  in_inverse_scale_ = p.input_scale.cwiseInverse();
+  out_mean_ = p.output_mean;
+  out_scale_ = p.output_scale;
+}
+
+Eigen::Vector2d Policy::act(const Observation& observation) const {
+  if (observation.size() != in_mean_.size()) {
+    throw InputError("observation", "has " + std::to_string(observation.size()) +
+                                        " values; the policy takes " +
+                                        std::to_string(in_mean_.size()));
+  }
+  // Single precision as in training; Eigen vectorises tanh for floats.
+  const Observation z = (observation - in_mean_).cwiseProduct(in_inverse_scale_);
+  Hidden h = (first_ * z.cast<float>() + bias_[0]).array().tanh().matrix();
+  for (std::size_t l = 1; l < kHiddenLayers; ++l) {
+    h = (hidden_[l - 1] * h + bias_[l]).array().tanh().matrix();
+  }
+  const Eigen::Vector2d y = (last_ * h + last_bias_).cast<double>();
+  return out_mean_ + y.cwiseProduct(out_scale_);
+}
+
+}  // namespace lanechange::learn

@@ -1,0 +1,367 @@
+#include "lanechange/learn/train.hpp"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+
+#include "common/json_fields.hpp"
+#include "data/manifest.hpp"
+#include "lanechange/error.hpp"
+#include "lanechange/learn/evaluation.hpp"
+#include "lanechange/learn/learn_data.hpp"
+#include "lanechange/learn/model.hpp"
+#include "learn/outputs.hpp"
+
+namespace lanechange::learn {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+// Sub-seeds, so that changing one part (say the CV folds) leaves the others.
+struct Seeds {
+  std::uint64_t split, folds, network, validation;
+  explicit Seeds(std::uint64_t s) : split(s), folds(s + 1), network(s + 2), validation(s + 3) {}
+  [[nodiscard]] json to_json() const {
+    return {{"split", split}, {"folds", folds}, {"network", network}, {"validation", validation}};
+  }
+};
+
+std::vector<int> labels_of(const std::vector<int>& all, const std::vector<int>& rows) {
+  std::vector<int> out;
+  for (int r : rows) out.push_back(all[static_cast<std::size_t>(r)]);
+  return out;
+}
+
+void check_out_dir(const std::string& out) {
+  if (out.empty()) throw InputError("--out", "must not be empty");
+  if (!fs::exists(out)) return;
+  if (!fs::is_directory(out)) throw InputError("--out", out + " exists and is not a directory");
+  if (!fs::is_empty(out) && !fs::exists(fs::path(out) / kModelFile)) {
+    throw InputError("--out", out + " is not empty and holds no model; refusing to replace it");
+  }
+}
+
+// The finished directory replaces the old one only once it is complete.
+void publish(const fs::path& staging, const fs::path& out) {
+  const fs::path old = out.string() + ".old." + std::to_string(::getpid());
+  if (fs::exists(out)) fs::rename(out, old);
+  fs::rename(staging, out);
+  fs::remove_all(old);
+}
+
+struct Context {
+  const TrainOptions& options;
+  const LearningData& data;
+  const Split& split;
+  Seeds seeds;
+  fs::path dir;  // staging directory
+  json model;    // model.json in the making
+  json metrics;
+
+  void say(const std::string& line) const {
+    if (options.progress != nullptr) *options.progress << "train: " << line << std::endl;
+  }
+};
+
+json accuracy_by_behavior(const Context& c, const std::vector<int>& truth,
+                          const std::vector<int>& predicted) {
+  json out = json::object();
+  for (int b = 0; b < kBehaviors; ++b) {
+    long long n = 0, right = 0;
+    for (std::size_t i = 0; i < truth.size(); ++i) {
+      if (c.data.scenarios.behavior[static_cast<std::size_t>(c.split.test[i])] != b) continue;
+      ++n;
+      right += truth[i] == predicted[i] ? 1 : 0;
+    }
+    if (n > 0)
+      out[std::string(kBehaviorNames[static_cast<std::size_t>(b)])] = double(right) / double(n);
+  }
+  return out;
+}
+
+json train_classifier(Context& c, ClassifierKind kind, FeatureSet set, const Eigen::MatrixXd& x,
+                      const std::vector<int>& y, const Eigen::MatrixXd& x_test,
+                      const std::vector<int>& y_test) {
+  const std::string name(classifier_name(kind));
+  const std::string set_name(feature_set_name(set));
+  const Selection selection =
+      select_hyperparameters(kind, x, y, c.options.search, c.seeds.folds, c.options.jobs);
+  const auto start = Clock::now();
+  auto model = make_classifier(kind, selection.chosen().hyper);
+  model->fit(x, y);
+  const double train_s = seconds_since(start);
+  const auto predict_start = Clock::now();
+  const std::vector<int> predicted = model->predict(x_test);
+  const double predict_us =
+      1e6 * seconds_since(predict_start) / double(std::max<std::size_t>(y_test.size(), 1));
+
+  const std::string file = "classifiers/" + set_name + "/" + classifier_file(kind);
+  fs::create_directories(c.dir / "classifiers" / set_name);
+  model->save((c.dir / file).string());
+  c.model["classifiers"][set_name][name] = {{"file", file},
+                                            {"hyperparameters", selection.chosen().hyper}};
+
+  const ClassScores scores = score(y_test, predicted, kClasses);
+  json m = scores.to_json();
+  m["cv_accuracy_mean"] = selection.chosen().mean();
+  m["cv_accuracy_sd"] = selection.chosen().sd();
+  m["cv_fold_accuracy"] = selection.chosen().fold_accuracy;
+  m["cv_candidates"] = json::array();
+  for (const auto& cand : selection.candidates) {
+    m["cv_candidates"].push_back(
+        {{"hyperparameters", cand.hyper}, {"cv_accuracy_mean", cand.mean()}});
+  }
+  m["hyperparameters"] = selection.chosen().hyper;
+  m["train_s"] = train_s;
+  m["predict_us_per_scene"] = predict_us;
+  m["accuracy_by_behavior"] = accuracy_by_behavior(c, y_test, predicted);
+
+  const std::string stem = "confusion_" + set_name + "_" + name;
+  detail::write_confusion_csv(scores.row_normalised(), (c.dir / (stem + ".csv")).string());
+  if (c.options.plots) {
+    detail::plot_confusion(scores.row_normalised(), name + " (" + set_name + ")",
+                           (c.dir / (stem + ".png")).string());
+  }
+  c.say(name + " (" + set_name + "): test accuracy " + std::to_string(scores.accuracy) + ", CV " +
+        std::to_string(selection.chosen().mean()) + ", trained in " + std::to_string(train_s) +
+        " s");
+  return m;
+}
+
+void train_classifier_set(Context& c, FeatureSet set) {
+  const bool with_behavior = set == FeatureSet::WithBehavior;
+  const ScenarioTable& t = c.data.scenarios;
+  const Standardizer standardizer =
+      Standardizer::fit(classifier_inputs(t, c.split.train, with_behavior));
+  const Eigen::MatrixXd x = standardizer.apply(classifier_inputs(t, c.split.train, with_behavior));
+  const Eigen::MatrixXd x_test =
+      standardizer.apply(classifier_inputs(t, c.split.test, with_behavior));
+  const std::vector<int> y = labels_of(t.label, c.split.train);
+  const std::vector<int> y_test = labels_of(t.label, c.split.test);
+  const std::string set_name(feature_set_name(set));
+  c.model["standardizers"][set_name] = standardizer.to_json();
+  c.model["features"]["classifier_" + set_name] = classifier_input_names(c.data, with_behavior);
+  json& out = c.metrics[with_behavior ? "classifiers_with_behavior" : "classifiers"];
+  for (ClassifierKind kind : kClassifierKinds) {
+    out[std::string(classifier_name(kind))] = train_classifier(c, kind, set, x, y, x_test, y_test);
+  }
+}
+
+json majority_class(const Context& c) {
+  const auto& label = c.data.scenarios.label;
+  std::vector<long long> count(kClasses, 0);
+  for (int r : c.split.train) ++count[static_cast<std::size_t>(label[static_cast<std::size_t>(r)])];
+  const int majority =
+      static_cast<int>(std::max_element(count.begin(), count.end()) - count.begin());
+  long long right = 0;
+  for (int r : c.split.test) right += label[static_cast<std::size_t>(r)] == majority ? 1 : 0;
+  return {{"class", kLabelNames[static_cast<std::size_t>(majority)]},
+          {"test_accuracy", double(right) / double(c.split.test.size())}};
+}
+
+// Physical errors of the exported policy on the test samples.
+json policy_errors(const Policy& policy, const SampleTable& s, const std::vector<int>& rows,
+                   const std::vector<std::string>& names) {
+  std::vector<std::vector<double>> abs_error(kActions);
+  for (int r : rows) {
+    const Eigen::Vector2d a = policy.act(s.inputs.row(r).transpose());
+    for (int k = 0; k < kActions; ++k)
+      abs_error[static_cast<std::size_t>(k)].push_back(std::abs(a(k) - s.targets(r, k)));
+  }
+  json rmse, p95;
+  for (int k = 0; k < kActions; ++k) {
+    auto& e = abs_error[static_cast<std::size_t>(k)];
+    double sum = 0.0;
+    for (double v : e) sum += v * v;
+    std::sort(e.begin(), e.end());
+    const std::string& name = names[static_cast<std::size_t>(k)];
+    rmse[name] = e.empty() ? 0.0 : std::sqrt(sum / double(e.size()));
+    // Nearest rank, as dataset-info's percentiles.
+    p95[name] =
+        e.empty()
+            ? 0.0
+            : e[static_cast<std::size_t>(std::max(1.0, std::ceil(0.95 * double(e.size())))) - 1];
+  }
+  return {{"test_rmse", rmse}, {"test_p95_abs_error", p95}};
+}
+
+// Training scenarios split once more, by scenario, for early stopping.
+std::vector<char> validation_scenarios(const Context& c) {
+  std::vector<int> well_posed;
+  for (int r : c.split.train) {
+    if (c.data.scenarios.label[static_cast<std::size_t>(r)] == kWellPosed) well_posed.push_back(r);
+  }
+  if (well_posed.size() < 2)
+    throw InputError("--data", "needs at least two well-posed training plans");
+  const Split inner = split_scenarios(static_cast<int>(well_posed.size()),
+                                      c.options.network.validation_share, c.seeds.validation);
+  std::vector<int> rows;
+  for (int i : inner.test) rows.push_back(well_posed[static_cast<std::size_t>(i)]);
+  return mask_of(rows, c.data.scenarios.rows());
+}
+
+void train_action_network(Context& c) {
+  const SampleTable& s = c.data.samples;
+  const int n = c.data.scenarios.rows();
+  const std::vector<char> validation_mask = validation_scenarios(c);
+  std::vector<char> fit_mask = mask_of(c.split.train, n);
+  for (int i = 0; i < n; ++i)
+    fit_mask[static_cast<std::size_t>(i)] &= !validation_mask[static_cast<std::size_t>(i)];
+  const std::vector<int> fit = sample_rows_of(s, fit_mask);
+  const std::vector<int> validation = sample_rows_of(s, validation_mask);
+  const std::vector<int> test = sample_rows_of(s, mask_of(c.split.test, n));
+
+  Eigen::MatrixXd fit_in(static_cast<Eigen::Index>(fit.size()), s.inputs.cols());
+  Eigen::MatrixXd fit_out(static_cast<Eigen::Index>(fit.size()), s.targets.cols());
+  for (std::size_t i = 0; i < fit.size(); ++i) {
+    fit_in.row(static_cast<Eigen::Index>(i)) = s.inputs.row(fit[i]);
+    fit_out.row(static_cast<Eigen::Index>(i)) = s.targets.row(fit[i]);
+  }
+  const Standardizer in_norm = Standardizer::fit(fit_in), out_norm = Standardizer::fit(fit_out);
+  NetworkSettings settings = c.options.network;
+  settings.seed = c.seeds.network;
+  c.say("action network: " + std::to_string(fit.size()) + " training rows, " +
+        std::to_string(validation.size()) + " validation rows");
+  const TrainedNetwork net = train_network(in_norm.apply(s.inputs), out_norm.apply(s.targets), fit,
+                                           validation, settings, c.options.progress);
+  PolicyWeights w{c.data.action_inputs, c.data.action_targets, in_norm.mean, in_norm.scale,
+                  out_norm.mean,        out_norm.scale,        {},           {}};
+  net.export_layers(w.weights, w.biases);
+  lanechange::detail::write_file_atomically((c.dir / "policy.json").string(), w.to_json().dump());
+  net.save((c.dir / "network.dlib").string());
+  detail::write_loss_csv(net.curve, (c.dir / "loss.csv").string());
+  if (c.options.plots) detail::plot_loss(net.curve, net.best_epoch, (c.dir / "loss.png").string());
+
+  json m = policy_errors(Policy(w), s, test, c.data.action_targets);
+  m["epochs"] = net.curve.size();
+  m["best_epoch"] = net.best_epoch;
+  m["best_validation_mse"] = net.curve[static_cast<std::size_t>(net.best_epoch - 1)].validation_mse;
+  m["train_s"] = net.train_s;
+  m["s_per_epoch"] = net.seconds_per_epoch();
+  m["train_rows"] = fit.size();
+  m["validation_rows"] = validation.size();
+  m["test_rows"] = test.size();
+  c.metrics["network"] = m;
+  c.model["network"] = {{"policy", "policy.json"}, {"dlib", "network.dlib"}};
+  c.say("action network: " + std::to_string(net.curve.size()) + " epochs, test RMSE a " +
+        m["test_rmse"].begin()->dump() + ", omega " + (++m["test_rmse"].begin())->dump());
+}
+
+json describe_data(const Context& c) {
+  const int n = c.data.scenarios.rows();
+  json split = json::array();
+  for (std::size_t d = 0; d < c.data.datasets.size(); ++d) {
+    std::vector<long long> test;
+    for (int r : c.split.test) {
+      if (c.data.scenarios.dataset[static_cast<std::size_t>(r)] == static_cast<int>(d)) {
+        test.push_back(c.data.scenarios.index[static_cast<std::size_t>(r)]);
+      }
+    }
+    const DatasetIdentity& id = c.data.datasets[d];
+    split.push_back({{"dir", id.dir},
+                     {"manifest_crc32", id.manifest_crc32},
+                     {"scenarios", id.scenarios},
+                     {"seed", id.seed},
+                     {"test_indices", test}});
+  }
+  return {{"datasets", split}, {"scenarios", n}};
+}
+
+void write_description(Context& c) {
+  c.model["format"] = kModelFormat;
+  c.model["config"] = c.options.config();
+  c.model["seeds"] = c.seeds.to_json();
+  c.model["expert_config"] = c.data.config;
+  c.model["dataset_format"] = c.data.dataset_format;
+  c.model["data"] = describe_data(c);
+  c.model["labels"] = kLabelNames;
+  c.model["features"]["action_inputs"] = c.data.action_inputs;
+  c.model["features"]["action_targets"] = c.data.action_targets;
+  c.model["features"]["classifier"] = c.data.classifier_features;
+  lanechange::detail::write_file_atomically((c.dir / "metrics.json").string(), c.metrics.dump(2));
+  lanechange::detail::write_file_atomically((c.dir / "report.md").string(),
+                                            detail::report_markdown(c.metrics));
+  // Every file but model.json itself, with its checksum.
+  json files = json::object();
+  for (const auto& entry : fs::recursive_directory_iterator(c.dir)) {
+    if (!entry.is_regular_file()) continue;
+    files[fs::relative(entry.path(), c.dir).generic_string()] =
+        data::detail::file_crc32(entry.path().string());
+  }
+  c.model["files"] = files;
+  lanechange::detail::write_file_atomically((c.dir / kModelFile).string(), c.model.dump(2));
+}
+
+}  // namespace
+
+json TrainOptions::config() const {
+  return {{"seed", seed},
+          {"test_share", test_share},
+          {"cv_folds", search.folds},
+          {"knn_k", search.knn_k},
+          {"ensemble_trees", search.ensemble_trees},
+          {"naive_bayes_kernel", search.naive_bayes_kernel},
+          {"quick_search", search.quick},
+          {"network",
+           {{"hidden_layers", kHiddenLayers},
+            {"hidden_width", kHiddenWidth},
+            {"activation", "tanh"},
+            {"optimizer", "adam"},
+            {"max_epochs", network.max_epochs},
+            {"patience", network.patience},
+            {"batch_size", network.batch_size},
+            {"learning_rate", network.learning_rate},
+            {"validation_share", network.validation_share}}}};
+}
+
+TrainReport train_models(const TrainOptions& options) {
+  const auto start = Clock::now();
+  check_out_dir(options.out_dir);
+  const LearningData data = load_learning_data(options.data_dirs);
+  const Split split = split_scenarios(data.scenarios.rows(), options.test_share, options.seed);
+  fs::path out = fs::path(options.out_dir).lexically_normal();
+  if (out.filename().empty()) out = out.parent_path();  // "model/": the staging dir is a sibling
+  const fs::path staging = out.string() + ".tmp." + std::to_string(::getpid());
+  fs::remove_all(staging);
+  fs::create_directories(staging);
+  Context c{options, data, split, Seeds(options.seed), staging, json::object(), json::object()};
+  try {
+    c.say("read " + std::to_string(data.scenarios.rows()) + " scenarios and " +
+          std::to_string(data.samples.rows()) + " well-posed samples from " +
+          std::to_string(data.datasets.size()) + " data set(s)");
+    c.metrics["seed"] = options.seed;
+    c.metrics["data"] = {
+        {"scenarios", data.scenarios.rows()},
+        {"train_scenarios", split.train.size()},
+        {"test_scenarios", split.test.size()},
+        {"train_samples",
+         sample_rows_of(data.samples, mask_of(split.train, data.scenarios.rows())).size()},
+        {"test_samples",
+         sample_rows_of(data.samples, mask_of(split.test, data.scenarios.rows())).size()}};
+    c.metrics["majority_class"] = majority_class(c);
+    train_classifier_set(c, FeatureSet::Plain);
+    train_classifier_set(c, FeatureSet::WithBehavior);
+    train_action_network(c);
+    c.metrics["wall_s"] = seconds_since(start);
+    write_description(c);
+    publish(staging, out);
+  } catch (...) {
+    std::error_code ignored;
+    fs::remove_all(staging, ignored);
+    throw;
+  }
+  c.say("wrote " + out.string());
+  return {c.metrics, seconds_since(start)};
+}
+
+}  // namespace lanechange::learn

@@ -1,0 +1,196 @@
+// End to end on a small generated data set: train, reload, refuse damage.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "../data/data_helpers.hpp"
+#include "lanechange/error.hpp"
+#include "lanechange/learn/learn_data.hpp"
+#include "lanechange/learn/model.hpp"
+#include "lanechange/learn/train.hpp"
+
+namespace lanechange::learn {
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+constexpr int kMaxEpochs = 6;
+
+// Path -> content of every file under dir.
+std::map<std::string, std::string> snapshot(const fs::path& dir) {
+  std::map<std::string, std::string> out;
+  for (const auto& e : fs::recursive_directory_iterator(dir)) {
+    if (e.is_regular_file()) out[e.path().string()] = testing::read_text(e.path().string());
+  }
+  return out;
+}
+
+class Trained : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    root_ = fs::temp_directory_path() / ("lanechange_learn_" + std::to_string(::getpid()));
+    fs::remove_all(root_);
+    fs::create_directories(root_);
+    const auto gen = testing::run_cli(testing::small_run(data_dir(), 120, 5, "--jobs 2"));
+    ASSERT_EQ(gen.exit_code, 0) << gen.output;
+    TrainOptions o = options(model_dir());
+    report_ = train_models(o);
+  }
+  static void TearDownTestSuite() { fs::remove_all(root_); }
+
+  static TrainOptions options(const std::string& out) {
+    TrainOptions o;
+    o.data_dirs = {data_dir()};
+    o.out_dir = out;
+    o.seed = 4;
+    o.jobs = 2;
+    o.search.quick = true;
+    o.network.max_epochs = kMaxEpochs;
+    o.plots = false;
+    return o;
+  }
+  static std::string data_dir() { return (root_ / "data").string(); }
+  static std::string model_dir() { return (root_ / "model").string(); }
+  static std::string train_args(const std::string& out) {
+    return "train --data " + data_dir() + " --out " + out +
+           " --seed 4 --jobs 2 --quick --max-epochs " + std::to_string(kMaxEpochs);
+  }
+
+  static inline fs::path root_;
+  static inline TrainReport report_;
+};
+
+TEST_F(Trained, MetricsHoldEveryClassifierAndTheNetwork) {
+  const json m = json::parse(testing::read_text(model_dir() + "/metrics.json"));
+  EXPECT_EQ(m, json::parse(report_.metrics.dump()));
+  for (const char* set : {"classifiers", "classifiers_with_behavior"}) {
+    for (ClassifierKind kind : kClassifierKinds) {
+      const json& c = m.at(set).at(std::string(classifier_name(kind)));
+      EXPECT_GE(c.at("test_accuracy").get<double>(), 0.0);
+      EXPECT_LE(c.at("test_accuracy").get<double>(), 1.0);
+      EXPECT_EQ(c.at("cv_fold_accuracy").size(), 5u);
+      EXPECT_EQ(c.at("confusion_row_normalised").size(), 3u);
+    }
+  }
+  EXPECT_EQ(m.at("data").at("test_scenarios").get<int>(), 24);  // 0.2 of 120
+  for (const char* out : {"a", "omega"}) {
+    EXPECT_TRUE(std::isfinite(m.at("network").at("test_rmse").at(out).get<double>()));
+    EXPECT_GE(m.at("network").at("test_p95_abs_error").at(out).get<double>(), 0.0);
+  }
+  EXPECT_LE(m.at("network").at("epochs").get<int>(), kMaxEpochs);
+  EXPECT_NE(testing::read_text(model_dir() + "/report.md").find("| svm |"), std::string::npos);
+}
+
+TEST_F(Trained, ReloadedModelGivesTheSamePredictions) {
+  const Model model = Model::load(model_dir());
+  const LearningData data = load_learning_data({data_dir()});
+  const json& d = model.description();
+  const auto test_indices =
+      d.at("data").at("datasets").at(0).at("test_indices").get<std::vector<long long>>();
+  std::vector<int> rows;
+  for (int r = 0; r < data.scenarios.rows(); ++r) {
+    if (std::find(test_indices.begin(), test_indices.end(),
+                  data.scenarios.index[static_cast<std::size_t>(r)]) != test_indices.end()) {
+      rows.push_back(r);
+    }
+  }
+  const json m = report_.metrics;
+  for (FeatureSet set : {FeatureSet::Plain, FeatureSet::WithBehavior}) {
+    const Eigen::MatrixXd raw =
+        classifier_inputs(data.scenarios, rows, set == FeatureSet::WithBehavior);
+    for (ClassifierKind kind : kClassifierKinds) {
+      const std::vector<int> predicted = model.classify(kind, set, raw);
+      Eigen::MatrixXd counts = Eigen::MatrixXd::Zero(kClasses, kClasses);
+      for (std::size_t i = 0; i < rows.size(); ++i) {
+        counts(data.scenarios.label[static_cast<std::size_t>(rows[i])], predicted[i]) += 1.0;
+      }
+      const json& want =
+          m.at(set == FeatureSet::Plain ? "classifiers" : "classifiers_with_behavior")
+              .at(std::string(classifier_name(kind)))
+              .at("confusion_counts");
+      for (int r = 0; r < kClasses; ++r) {
+        for (int c = 0; c < kClasses; ++c)
+          EXPECT_EQ(counts(r, c), want[r][c].get<double>()) << classifier_name(kind);
+      }
+    }
+  }
+  // The reloaded policy reproduces the stored test error.
+  const std::vector<int> samples =
+      sample_rows_of(data.samples, mask_of(rows, data.scenarios.rows()));
+  double sum = 0.0;
+  for (int r : samples) {
+    const double e =
+        model.policy().act(data.samples.inputs.row(r).transpose())(0) - data.samples.targets(r, 0);
+    sum += e * e;
+  }
+  EXPECT_NEAR(std::sqrt(sum / static_cast<double>(samples.size())),
+              m.at("network").at("test_rmse").at("a").get<double>(), 1e-9);
+}
+
+TEST_F(Trained, DamagedOrForeignModelsAreRefused) {
+  const fs::path copy = root_ / "damaged";
+  fs::remove_all(copy);
+  fs::copy(model_dir(), copy, fs::copy_options::recursive);
+  const fs::path svm = copy / "classifiers" / "plain" / "svm.libsvm";
+  fs::resize_file(svm, fs::file_size(svm) / 2);
+  EXPECT_THROW((void)Model::load(copy.string()), InputError);
+  const auto info = testing::run_cli("model-info " + copy.string());
+  EXPECT_EQ(info.exit_code, 2) << info.output;
+  EXPECT_NE(info.output.find("checksum"), std::string::npos) << info.output;
+  const auto good = testing::run_cli("model-info " + model_dir());
+  EXPECT_EQ(good.exit_code, 0) << good.output;
+
+  fs::remove_all(copy);
+  fs::copy(model_dir(), copy, fs::copy_options::recursive);
+  json d = json::parse(testing::read_text((copy / "model.json").string()));
+  d["format"] = "lanechange.model/0";
+  testing::write_text((copy / "model.json").string(), d.dump());
+  EXPECT_THROW((void)Model::load(copy.string()), InputError);
+
+  ModelRequirements wrong_features;
+  wrong_features.classifier_features = {"ego_x0", "ego_v0"};
+  EXPECT_THROW((void)Model::load(model_dir(), wrong_features), InputError);
+  ModelRequirements other_config;
+  other_config.expert_config = json{{"expert", {{"steps", 99}}}};
+  EXPECT_THROW((void)Model::load(model_dir(), other_config), InputError);
+  ModelRequirements fitting;
+  fitting.classifier_features = load_learning_data({data_dir()}).classifier_features;
+  EXPECT_NO_THROW((void)Model::load(model_dir(), fitting));
+}
+
+TEST_F(Trained, CliTrainsRepeatablyWithPicturesAndBadInputLeavesTheModelAlone) {
+  const std::string out = (root_ / "cli_model").string();
+  const auto run = testing::run_cli(train_args(out + "/"));  // a trailing slash is the same dir
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  EXPECT_NE(run.output.find("svm (plain)"), std::string::npos) << run.output;
+  const json m = json::parse(testing::read_text(out + "/metrics.json"));
+  for (ClassifierKind kind : kClassifierKinds) {
+    const std::string name(classifier_name(kind));
+    EXPECT_EQ(m["classifiers"][name]["test_accuracy"],
+              report_.metrics["classifiers"][name]["test_accuracy"])
+        << name;
+  }
+  EXPECT_EQ(m["network"]["test_rmse"], report_.metrics["network"]["test_rmse"]);
+  for (const char* png :
+       {"loss.png", "confusion_plain_svm.png", "confusion_with_behavior_knn.png"}) {
+    EXPECT_TRUE(fs::exists(fs::path(out) / png)) << png;
+  }
+  const auto before = snapshot(out);
+  const auto bad =
+      testing::run_cli("train --data " + (root_ / "nothing").string() + " --out " + out);
+  EXPECT_EQ(bad.exit_code, 2) << bad.output;
+  EXPECT_EQ(snapshot(out), before);
+
+  const fs::path foreign = root_ / "foreign";
+  fs::create_directories(foreign);
+  testing::write_text((foreign / "keep.txt").string(), "mine");
+  const auto refused = testing::run_cli(train_args(foreign.string()));
+  EXPECT_EQ(refused.exit_code, 2) << refused.output;
+  EXPECT_EQ(testing::read_text((foreign / "keep.txt").string()), "mine");
+}
+
+}  // namespace
+}  // namespace lanechange::learn
