@@ -18,9 +18,11 @@ void add_simulate(CLI::App& app, ConfigSource config_source) {
   static std::string scenario_path;
   static std::string planner_name = "miqp";
   static double duration = 0.0;
+  static std::string model_dir;
   static std::string out_path = "-";
   cmd->add_option("--scenario", scenario_path, "Scenario JSON file")->required();
-  cmd->add_option("--planner", planner_name, "Planner: miqp or keep-lane");
+  cmd->add_option("--planner", planner_name, "Planner: miqp, mlp-miqp or keep-lane");
+  cmd->add_option("--model", model_dir, "Model directory (lanechange train), for mlp-miqp");
   cmd->add_option("--duration", duration,
                   "Seconds to simulate (default: the horizon plus closed_loop.settle_time)")
       ->check(CLI::PositiveNumber);
@@ -28,7 +30,7 @@ void add_simulate(CLI::App& app, ConfigSource config_source) {
   cmd->callback([config_source] {
     const Config config = config_source();
     const Scenario scenario = load_scenario(scenario_path, config);
-    const auto planner = planner::make_planner(planner_name, config);
+    const auto planner = planner::make_planner(planner_name, config, model_dir);
     const sim::Rollout rollout = sim::simulate(scenario, *planner, config, {duration});
     sim::save_rollout(rollout, out_path);
     const auto& m = rollout.metrics;
@@ -50,7 +52,9 @@ void add_evaluate(CLI::App& app, ConfigSource config_source) {
   cmd->add_option("--count", o.count, "How many sampled scenarios")->required();
   cmd->add_option("--seed", o.seed, "Sampler seed")->required();
   cmd->add_option("--behavior", behavior, "constant_speed, constant_accel, idm or all");
-  cmd->add_option("--planner", planners, "Planner names, comma-separated (miqp, keep-lane)");
+  cmd->add_option("--planner", planners,
+                  "Planner names, comma-separated (miqp, mlp-miqp, keep-lane)");
+  cmd->add_option("--model", o.model_dir, "Model directory (lanechange train), for mlp-miqp");
   cmd->add_option("--out", o.out_dir, "Output directory; rerun the command to resume")->required();
   cmd->add_option("--jobs", jobs, "Worker threads (default: all cores)")
       ->check(CLI::NonNegativeNumber);

@@ -1,7 +1,7 @@
 #include <algorithm>
 
 #include "lanechange/error.hpp"
-#include "planner/miqp_planner.hpp"
+#include "planner/mlp_miqp_planner.hpp"
 
 namespace lanechange::planner {
 
@@ -35,9 +35,20 @@ class KeepLanePlanner final : public ClosedLoopPlanner {
 
 }  // namespace
 
-std::vector<std::string> planner_names() { return {"miqp", "keep-lane"}; }
+std::vector<std::string> planner_names() { return {"miqp", "mlp-miqp", "keep-lane"}; }
 
-std::shared_ptr<const ClosedLoopPlanner> make_planner(std::string_view name, const Config& config) {
+std::shared_ptr<const ClosedLoopPlanner> make_planner(std::string_view name, const Config& config,
+                                                      const std::string& model_dir) {
+  if (name == "mlp-miqp") {
+    if (model_dir.empty()) {
+      throw InputError("--model", "mlp-miqp needs a model directory (lanechange train)");
+    }
+    // The network's inputs are checked by name when the planner maps them
+    // onto an observation; the closed loop's config may differ from the data's.
+    auto model = std::make_shared<const learn::Model>(learn::Model::load(model_dir));
+    return std::make_shared<MlpMiqpPlanner>(config, std::move(model),
+                                            std::make_shared<expert::FastLaneChangeSolver>());
+  }
   if (name == "miqp") {
     return std::make_shared<MiqpPlanner>(config, std::make_shared<expert::FastLaneChangeSolver>());
   }

@@ -39,6 +39,7 @@ json parameters_of(const EvaluateOptions& o) {
           {"seed", o.seed},
           {"behavior", o.behavior ? std::string(to_string(*o.behavior)) : "all"},
           {"planners", o.planners},
+          {"model", o.model_dir},
           {"shard_size", o.shard_size},
           {"duration", o.duration},
           {"config", o.config}};
@@ -54,7 +55,7 @@ void validate(const EvaluateOptions& o) {
   require(!o.out_dir.empty(), "--out", "must name a directory");
   require(std::isfinite(o.duration) && o.duration >= 0, "--duration", "must be >= 0");
   o.config.validate();
-  for (const auto& name : o.planners) (void)planner::make_planner(name, o.config);
+  for (const auto& name : o.planners) (void)planner::make_planner(name, o.config, o.model_dir);
 }
 
 // Creates the directory and its manifest, or checks that the manifest there
@@ -169,7 +170,9 @@ EvaluateReport evaluate(const EvaluateOptions& o, const EvaluateRun& run) {
     }
   }
   std::vector<std::shared_ptr<const planner::ClosedLoopPlanner>> planners;
-  for (const auto& name : o.planners) planners.push_back(planner::make_planner(name, o.config));
+  for (const auto& name : o.planners) {
+    planners.push_back(planner::make_planner(name, o.config, o.model_dir));
+  }
   const ScenarioSampler sampler(o.config, o.seed);
   const auto per_shard = static_cast<long long>(planners.size());
   long long total = 0;

@@ -88,11 +88,12 @@ class LaneKeeper {
 /// bounds over the next step. Returns true when it had to.
 bool clip_to_limits(EgoControl& control, const EgoState& ego, const Limits& limits, double dt);
 
-/// The planners by name: "miqp" (the exact expert, re-planning) and the fallback
+/// The planners by name: "miqp" (the exact expert, re-planning), "mlp-miqp", and the fallback
 /// (the lane keeper alone: never changes lanes; named "keep-lane"). Throws InputError for an
 /// unknown name.
-[[nodiscard]] std::shared_ptr<const ClosedLoopPlanner> make_planner(std::string_view name,
-                                                                    const Config& config);
+/// "mlp-miqp" (Algorithm 1) loads its models from `model_dir`.
+[[nodiscard]] std::shared_ptr<const ClosedLoopPlanner> make_planner(
+    std::string_view name, const Config& config, const std::string& model_dir = "");
 [[nodiscard]] std::vector<std::string> planner_names();
 
 }  // namespace lanechange::planner

@@ -19,6 +19,7 @@ struct EvaluateOptions {
   std::uint64_t seed = 0;
   std::optional<Behavior> behavior;  ///< none: each scenario's own draw
   std::vector<std::string> planners;
+  std::string model_dir;  ///< for mlp-miqp
   std::string out_dir;
   long long shard_size = 20;
   double duration = 0.0;  ///< s per rollout; 0: horizon + settle time

@@ -1,0 +1,217 @@
+// The paper's Algorithm 1 (MLP-MIQP): classify the scene once; if a lane
+// change is not worth trying, fall back. Otherwise the action network acts
+// every step, and before each action its policy is rolled forward over the
+// look-ahead against the predicted cars: a predicted collision or a broken
+// limit hands the rest of the manoeuvre to the exact expert (the take-over),
+// and the fallback acts where the expert finds no plan either.
+#include "planner/mlp_miqp_planner.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <functional>
+#include <map>
+
+#include "lanechange/checks.hpp"
+#include "lanechange/ego.hpp"
+#include "lanechange/error.hpp"
+#include "lanechange/traffic.hpp"
+
+namespace lanechange::planner {
+
+namespace {
+
+using Getter = std::function<double(const Observation&)>;
+
+// Where each input column of the data set (docs/dataset.md) comes from in an
+// observation: the initial scene, the time, the ego now, the cars now.
+const std::map<std::string, Getter>& input_sources() {
+  static const std::map<std::string, Getter> sources = [] {
+    std::map<std::string, Getter> m;
+    m["ego_x0"] = [](const Observation& o) { return o.scene->ego.x; };
+    m["ego_y0"] = [](const Observation& o) { return o.scene->ego.y; };
+    m["ego_v0"] = [](const Observation& o) { return o.scene->ego.v; };
+    m["ego_theta0"] = [](const Observation& o) { return o.scene->ego.theta; };
+    m["ego_a0"] = [](const Observation& o) { return o.scene->ego.a; };
+    m["t"] = [](const Observation& o) { return o.t; };
+    m["x"] = [](const Observation& o) { return o.ego.x; };
+    m["y"] = [](const Observation& o) { return o.ego.y; };
+    m["v"] = [](const Observation& o) { return o.ego.v; };
+    m["theta"] = [](const Observation& o) { return o.ego.theta; };
+    for (const Car car : kAllCars) {
+      const std::string name(to_string(car));
+      m[name + "_x0"] = [car](const Observation& o) { return o.scene->car(car).x; };
+      m[name + "_v0"] = [car](const Observation& o) { return o.scene->car(car).v; };
+      m[name + "_a0"] = [car](const Observation& o) { return o.scene->car(car).a; };
+      m[name + "_x"] = [car](const Observation& o) { return o.car(car).x; };
+      m[name + "_v"] = [car](const Observation& o) { return o.car(car).v; };
+      m[name + "_a"] = [car](const Observation& o) { return o.car(car).a; };
+    }
+    return m;
+  }();
+  return sources;
+}
+
+std::vector<std::string> names_of(const learn::Model& model, const char* which) {
+  try {
+    return model.description().at("features").at(which).get<std::vector<std::string>>();
+  } catch (const nlohmann::json::exception& e) {
+    throw InputError("model", std::string("model.json lists no features.") + which);
+  }
+}
+
+}  // namespace
+
+static MlpMiqpPlanner::SceneClassifier scene_classifier(std::shared_ptr<const learn::Model> model) {
+  auto features = std::make_shared<const PolicyInputs>(names_of(*model, "classifier"));
+  return [model = std::move(model), features](const Scenario& s) {
+    Observation start;
+    start.scene = &s;
+    start.ego = s.ego;
+    start.cars = {s.leader, s.follower, s.target};
+    const Eigen::MatrixXd row = features->read(start).transpose();
+    return model->classify(learn::ClassifierKind::Svm, learn::FeatureSet::Plain, row).front();
+  };
+}
+
+static MlpMiqpPlanner::Network network_of(std::shared_ptr<const learn::Model> model) {
+  auto inputs = std::make_shared<const PolicyInputs>(names_of(*model, "action_inputs"));
+  return [model = std::move(model), inputs](const Observation& o) {
+    const Eigen::Vector2d u = model->policy().act(inputs->read(o));
+    return EgoControl{u[0], u[1]};
+  };
+}
+
+PolicyInputs::PolicyInputs(const std::vector<std::string>& names) {
+  for (const std::string& name : names) {
+    const auto it = input_sources().find(name);
+    if (it == input_sources().end()) {
+      throw InputError("model", "the network wants the input \"" + name +
+                                    "\", which an observation does not give");
+    }
+    getters_.push_back(&it->second);
+  }
+}
+
+learn::Observation PolicyInputs::read(const Observation& o) const {
+  learn::Observation x(static_cast<Eigen::Index>(getters_.size()));
+  for (std::size_t i = 0; i < getters_.size(); ++i) {
+    x[static_cast<Eigen::Index>(i)] = (*getters_[i])(o);
+  }
+  return x;
+}
+
+MlpMiqpPlanner::MlpMiqpPlanner(Config config, SceneClassifier classify, Network network,
+                               std::shared_ptr<const expert::LaneChangeSolver> solver)
+    : config_(closed_loop_expert(std::move(config))),
+      classify_(std::move(classify)),
+      network_(std::move(network)),
+      expert_(config_, std::move(solver)) {}
+
+MlpMiqpPlanner::MlpMiqpPlanner(Config config, std::shared_ptr<const learn::Model> model,
+                               std::shared_ptr<const expert::LaneChangeSolver> solver)
+    : MlpMiqpPlanner(std::move(config), scene_classifier(model), network_of(model),
+                     std::move(solver)) {}
+
+std::unique_ptr<PlannerSession> MlpMiqpPlanner::start(const Scenario& scene) const {
+  return std::make_unique<MlpMiqpSession>(*this, classify_(scene));
+}
+
+MlpMiqpSession::MlpMiqpSession(const MlpMiqpPlanner& planner, int scene_class)
+    : planner_(planner),
+      keeper_(planner.config()),
+      expert_(planner.expert(), planner.config()),
+      give_up_(scene_class == static_cast<int>(Label::Failure)) {}
+
+Decision MlpMiqpSession::act(const Observation& o) {
+  if (give_up_) {
+    return {fallback_control(keeper_, o), ActStatus::Fallback,
+            "the classifier expects no lane change to succeed"};
+  }
+  if (expert_in_charge_) return expert_decision(o, "");
+  const EgoControl u = network_control(o);
+  const std::string problem = check_ahead(o, u);
+  if (problem.empty()) return {u, ActStatus::Planned, ""};
+  expert_in_charge_ = true;
+  return expert_decision(o, problem);
+}
+
+Decision MlpMiqpSession::expert_decision(const Observation& o, const std::string& why) {
+  Decision d = expert_.act(o);
+  // The step of the take-over is one whatever the expert finds; after it,
+  // the expert's own status tells whether it planned or fell back.
+  if (!why.empty()) {
+    d.reason = "take-over: " + why + (d.reason.empty() ? "" : "; " + d.reason);
+    d.status = ActStatus::TookOver;
+  } else if (d.status == ActStatus::Planned) {
+    d.status = ActStatus::TookOver;
+    d.reason = "the expert drives since the take-over";
+  }
+  return d;
+}
+
+EgoControl MlpMiqpSession::network_control(const Observation& o) const {
+  return planner_.network(o);
+}
+
+// The policy rolled forward against the cars as their behavior predicts
+// them from now (IDM reacting to the rolled-out ego), through the planner's
+// model of the ego, its controls saturated at the limits. Empty when the
+// look-ahead stays on the road, within the speed bounds and clear of the cars.
+std::string MlpMiqpSession::check_ahead(const Observation& now, EgoControl first) const {
+  const Config& config = planner_.config();
+  const Scenario& scene = *now.scene;
+  const Limits& limits = scene.limits;
+  const double dt = scene.horizon / scene.steps;
+  const int steps = static_cast<int>(std::lround(config.closed_loop.lookahead / dt));
+  Scenario from_now = scene_now(now, config);
+  TrafficModel traffic(from_now, config);
+  Observation o = now;
+  std::vector<EgoState> path = {now.ego};
+  TrafficPrediction predicted;
+  predicted.dt = dt;
+  auto record_cars = [&] {
+    for (const Car c : kAllCars) {
+      CarTrack& track = predicted.cars[static_cast<std::size_t>(c)];
+      track.x.push_back(traffic.car(c).x);
+      track.v.push_back(traffic.car(c).v);
+      track.a.push_back(traffic.car(c).a);
+    }
+  };
+  record_cars();
+  EgoControl u = first;
+  for (int k = 0; k < steps; ++k) {
+    // The actuators saturate (the simulator clips the same way): a network
+    // that asks for a little more than the limit is not a danger by itself.
+    (void)clip_to_limits(u, o.ego, limits, dt);
+    traffic.step(dt, {o.ego.x, o.ego.y, o.ego.v});
+    o.ego = step_trapezoidal(o.ego, u, dt);
+    o.ego.a = u.a;
+    o.t += dt;
+    ++o.step;
+    for (const Car c : kAllCars) o.cars[static_cast<std::size_t>(c)] = traffic.car(c);
+    path.push_back(o.ego);
+    record_cars();
+    // The road's edges, not the expert's planning margin: the body must stay
+    // within the outer edges of the two lanes.
+    const double half_body = scene.vehicle.width / 2.0;
+    const double lower_edge = -scene.lane_width / 2.0;
+    const double upper_edge = 1.5 * scene.lane_width;
+    if (!limits.v.contains(o.ego.v) || o.ego.y - half_body < lower_edge ||
+        o.ego.y + half_body > upper_edge) {
+      char what[160];
+      std::snprintf(what, sizeof what,
+                    "the network leaves the speed or road bounds %d steps ahead (v %.2f m/s, "
+                    "y %.2f m)",
+                    k + 1, o.ego.v, o.ego.y);
+      return what;
+    }
+    u = network_control(o);
+  }
+  if (const auto hit = first_collision(path, predicted, from_now)) {
+    return "the network would hit the " + std::string(to_string(hit->car)) + " in " +
+           std::to_string(hit->time) + " s";
+  }
+  return "";
+}
+
+}  // namespace lanechange::planner

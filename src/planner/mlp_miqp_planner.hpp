@@ -1,0 +1,66 @@
+#pragma once
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "lanechange/learn/model.hpp"
+#include "planner/miqp_planner.hpp"
+
+namespace lanechange::planner {
+
+/// Reads the network's input columns (by their data-set names) out of an
+/// observation. InputError for a column an observation does not give.
+class PolicyInputs {
+ public:
+  explicit PolicyInputs(const std::vector<std::string>& names);
+  [[nodiscard]] learn::Observation read(const Observation& observation) const;
+
+ private:
+  std::vector<const std::function<double(const Observation&)>*> getters_;
+};
+
+class MlpMiqpPlanner final : public ClosedLoopPlanner {
+ public:
+  /// The learned parts: the scene's class (Label order) and the network's
+  /// raw control. Const and safe to call from many threads.
+  using SceneClassifier = std::function<int(const Scenario&)>;
+  using Network = std::function<EgoControl(const Observation&)>;
+
+  MlpMiqpPlanner(Config config, SceneClassifier classify, Network network,
+                 std::shared_ptr<const expert::LaneChangeSolver> solver);
+  /// The SVM (13 features) and the action network of a trained model.
+  MlpMiqpPlanner(Config config, std::shared_ptr<const learn::Model> model,
+                 std::shared_ptr<const expert::LaneChangeSolver> solver);
+  [[nodiscard]] std::string_view name() const override { return "mlp-miqp"; }
+  [[nodiscard]] std::unique_ptr<PlannerSession> start(const Scenario& scene) const override;
+
+  [[nodiscard]] const Config& config() const { return config_; }
+  [[nodiscard]] EgoControl network(const Observation& o) const { return network_(o); }
+  [[nodiscard]] const expert::ExpertPlanner& expert() const { return expert_; }
+
+ private:
+  Config config_;
+  SceneClassifier classify_;
+  Network network_;
+  expert::ExpertPlanner expert_;
+};
+
+class MlpMiqpSession final : public PlannerSession {
+ public:
+  MlpMiqpSession(const MlpMiqpPlanner& planner, int scene_class);
+  [[nodiscard]] Decision act(const Observation& observation) override;
+
+ private:
+  [[nodiscard]] EgoControl network_control(const Observation& observation) const;
+  [[nodiscard]] std::string check_ahead(const Observation& now, EgoControl first) const;
+  [[nodiscard]] Decision expert_decision(const Observation& observation, const std::string& why);
+
+  const MlpMiqpPlanner& planner_;
+  LaneKeeper keeper_;
+  MiqpSession expert_;
+  bool give_up_ = false;
+  bool expert_in_charge_ = false;
+};
+
+}  // namespace lanechange::planner

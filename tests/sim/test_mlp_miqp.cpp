@@ -1,0 +1,95 @@
+#include <gtest/gtest.h>
+
+#include "lanechange/sim/simulator.hpp"
+#include "planner/mlp_miqp_planner.hpp"
+#include "test_helpers.hpp"
+
+namespace lanechange {
+namespace {
+
+using planner::MlpMiqpPlanner;
+using planner::Observation;
+using sim::Outcome;
+
+constexpr int kWorthTrying = static_cast<int>(Label::WellPosed);
+
+MlpMiqpPlanner forced(MlpMiqpPlanner::Network network, int scene_class = kWorthTrying) {
+  return {Config{}, [scene_class](const Scenario&) { return scene_class; }, std::move(network),
+          std::make_shared<expert::FastLaneChangeSolver>()};
+}
+
+// A "network" that steers hard into the target lane whatever is there.
+EgoControl swerve_left(const Observation&) { return {0.0, 0.26}; }
+
+TEST(MlpMiqp, ANetworkSteeringIntoACarIsTakenOverAndNothingIsHit) {
+  const Scenario s = testing::no_gap_scenario();
+  const MlpMiqpPlanner p = forced(swerve_left);
+  const sim::Rollout r = sim::simulate(s, p, Config{});
+  EXPECT_GE(r.metrics.takeovers, 1);
+  EXPECT_FALSE(r.trajectory.collision) << r.reason;
+  // The expert finds no gap either, so the fallback keeps the ego lane.
+  EXPECT_EQ(r.outcome, Outcome::Aborted) << r.reason;
+  EXPECT_GT(r.metrics.fallbacks, 0);
+}
+
+TEST(MlpMiqp, ASceneClassedAsFailureIsNotTried) {
+  const Scenario s = testing::open_road_scenario();
+  int calls = 0;
+  const MlpMiqpPlanner p = forced(
+      [&calls](const Observation& o) {
+        ++calls;
+        return swerve_left(o);
+      },
+      static_cast<int>(Label::Failure));
+  const sim::Rollout r = sim::simulate(s, p, Config{});
+  EXPECT_EQ(r.outcome, Outcome::Aborted);
+  EXPECT_EQ(calls, 0);
+}
+
+TEST(MlpMiqp, ANetworkThatDrivesWellIsNotOverruled) {
+  // A lane keeper aimed at the target lane stands in for a good network.
+  const Config config;
+  const planner::LaneKeeper keeper(config);
+  const MlpMiqpPlanner p = forced([&keeper](const Observation& o) {
+    return keeper.control(o.ego, o.scene->lane_width, nullptr);
+  });
+  const Scenario s = testing::open_road_scenario();
+  const sim::Rollout r = sim::simulate(s, p, config);
+  EXPECT_EQ(r.metrics.takeovers, 0) << (r.steps.empty() ? "" : r.steps.front().reason);
+  for (const auto& step : r.steps) {
+    if (!step.reason.empty()) ADD_FAILURE() << step.reason;
+  }
+  EXPECT_FALSE(r.trajectory.collision);
+  EXPECT_GT(r.manoeuvre_over_at, 0.0);
+  EXPECT_EQ(r.outcome, Outcome::WellPosed) << r.reason;
+}
+
+// The real thing: a model trained by the CLI on a small data set drives the
+// loop without collision. (A 60-scene network need not finish the change;
+// docs/closed_loop.md has the paper-scale model's results.)
+TEST(MlpMiqp, ATrainedModelDrivesTheLoopWithoutCollision) {
+  testing::TempDir dir;
+  ASSERT_EQ(
+      testing::run_cli("generate --count 60 --seed 3 --jobs 2 --out " + dir.file("data")).exit_code,
+      0);
+  const auto trained = testing::run_cli("train --quick --no-plots --max-epochs 20 --data " +
+                                        dir.file("data") + " --out " + dir.file("model"));
+  ASSERT_EQ(trained.exit_code, 0) << trained.output;
+  testing::write_text(dir.file("s.json"), scenario_to_json(testing::open_road_scenario()).dump());
+  const auto run =
+      testing::run_cli("simulate --planner mlp-miqp --model " + dir.file("model") + " --scenario " +
+                       dir.file("s.json") + " --out " + dir.file("r.json"));
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  const auto rollout = nlohmann::json::parse(testing::read_text(dir.file("r.json")));
+  EXPECT_EQ(rollout["planner"], "mlp-miqp");
+  EXPECT_FALSE(rollout["collision"].get<bool>());
+  const std::string outcome = rollout["outcome"];
+  EXPECT_NO_THROW((void)sim::outcome_from_string(outcome));
+  EXPECT_EQ(rollout["t"].size(), rollout["ego"]["y"].size());
+  EXPECT_EQ(
+      testing::run_cli("simulate --planner mlp-miqp --scenario " + dir.file("s.json")).exit_code,
+      2);  // no --model
+}
+
+}  // namespace
+}  // namespace lanechange
