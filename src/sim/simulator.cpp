@@ -134,6 +134,23 @@ class Loop {
   Trajectory path_;
 };
 
+// Not at fault: run into from behind by a car of the lane the ego's body has
+// been wholly in for at least kReactionTime, time that car had to react. A
+// cut-in closer than that, or any other contact, is the ego's.
+bool at_fault(const Trajectory& t, const Scenario& scene, const Collision& hit) {
+  constexpr double kReactionTime = 1.0;  // s
+  const auto node = static_cast<std::size_t>(hit.node);
+  const double half_width = scene.vehicle.width / 2.0;
+  const double lane = scene.lane_center(hit.car);
+  auto inside = [&](std::size_t k) {
+    return std::abs(t.ego[k].y - lane) + half_width <= scene.lane_width / 2.0;
+  };
+  if (t.others.car(hit.car).x[node] >= t.ego[node].x) return true;
+  std::size_t first = node;
+  while (first > 0 && inside(first - 1)) --first;
+  return !inside(node) || t.t[node] - t.t[first] < kReactionTime;
+}
+
 }  // namespace
 
 Rollout simulate(const Scenario& scene, const planner::ClosedLoopPlanner& planner,
@@ -151,12 +168,7 @@ Rollout simulate(const Scenario& scene, const planner::ClosedLoopPlanner& planne
   t.collision = hit.has_value();
   out.outcome = judge(t, config, out.reason);
   if (hit) {
-    const EgoState& ego = t.ego[static_cast<std::size_t>(hit->node)];
-    const double car_x = t.others.car(hit->car).x[static_cast<std::size_t>(hit->node)];
-    const double half_width = scene.vehicle.width / 2.0;
-    const double lane = scene.lane_center(hit->car);
-    const bool inside_lane = std::abs(ego.y - lane) + half_width <= scene.lane_width / 2.0;
-    out.collision_at_fault = !(car_x < ego.x && inside_lane);
+    out.collision_at_fault = at_fault(t, scene, *hit);
     out.reason = "collision with the " + std::string(to_string(hit->car)) + " at " +
                  std::to_string(hit->time) + " s" +
                  (out.collision_at_fault ? "" : " (run into from behind: not at fault)");

@@ -64,8 +64,8 @@ struct Rollout {
   RolloutMetrics metrics;
   double manoeuvre_over_at = -1.0;  ///< s; -1 if the ego never settled in the target lane
   /// A collision the ego caused: anything but being run into from behind by
-  /// a car of the lane its body is wholly in (a constant-speed or
-  /// constant-acceleration car does not react to the ego at all).
+  /// a car of the lane its body has been wholly in for at least 1 s (a
+  /// constant-speed or constant-acceleration car does not react to the ego).
   bool collision_at_fault = false;
 };
 
