@@ -107,7 +107,7 @@ MlpMiqpPlanner::MlpMiqpPlanner(Config config, SceneClassifier classify, Network 
       network_(std::move(network)),
       expert_(config_, std::move(solver)) {}
 
-MlpMiqpPlanner::MlpMiqpPlanner(Config config, std::shared_ptr<const learn::Model> model,
+MlpMiqpPlanner::MlpMiqpPlanner(Config config, const std::shared_ptr<const learn::Model>& model,
                                std::shared_ptr<const expert::LaneChangeSolver> solver)
     : MlpMiqpPlanner(std::move(config), scene_classifier(model), network_of(model),
                      std::move(solver)) {}

@@ -30,7 +30,7 @@ class MlpMiqpPlanner final : public ClosedLoopPlanner {
   MlpMiqpPlanner(Config config, SceneClassifier classify, Network network,
                  std::shared_ptr<const expert::LaneChangeSolver> solver);
   /// The SVM (13 features) and the action network of a trained model.
-  MlpMiqpPlanner(Config config, std::shared_ptr<const learn::Model> model,
+  MlpMiqpPlanner(Config config, const std::shared_ptr<const learn::Model>& model,
                  std::shared_ptr<const expert::LaneChangeSolver> solver);
   [[nodiscard]] std::string_view name() const override { return "mlp-miqp"; }
   [[nodiscard]] std::unique_ptr<PlannerSession> start(const Scenario& scene) const override;

@@ -207,9 +207,11 @@ EvaluateReport evaluate(const EvaluateOptions& o, const EvaluateRun& run) {
       next = todo.size();
     }
   };
-  const int jobs = run.jobs > 0 ? run.jobs : std::max(1U, std::thread::hardware_concurrency());
+  const unsigned jobs = run.jobs > 0 ? static_cast<unsigned>(run.jobs)
+                                     : std::max(1U, std::thread::hardware_concurrency());
   std::vector<std::thread> threads;
-  for (int j = 0; j < jobs; ++j) threads.emplace_back(worker);
+  threads.reserve(jobs);
+  for (unsigned j = 0; j < jobs; ++j) threads.emplace_back(worker);
   for (auto& t : threads) t.join();
   progress.finish();
   if (error) std::rethrow_exception(error);

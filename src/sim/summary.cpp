@@ -79,6 +79,7 @@ std::string summary_row(const std::string& planner, const std::string& behavior,
   };
   auto values = [&](double Row::*member) {
     std::vector<double> v;
+    v.reserve(rows.size());
     for (const Row* r : rows) v.push_back(r->*member);
     return v;
   };
