@@ -319,13 +319,41 @@ void write_cars(std::ostream& out, const std::vector<Snapshot>& snaps, double la
   }
 }
 
+// A rollout (docs/closed_loop.md) lists the steps where the planner's own
+// method did not act; they are marked on the path. Returns the marks drawn.
+int write_event_marks(std::ostream& out, const Trajectory& tr, const char* kind) {
+  const auto& details = tr.details;
+  if (!details.contains("events") || !details["events"].contains(kind)) return 0;
+  out << "$" << kind << " << EOD\n";
+  int marks = 0;
+  for (const auto& event : details["events"][kind]) {
+    if (!event.is_object() || !event.contains("step")) continue;
+    const auto k = event["step"].get<std::size_t>();
+    if (k >= tr.ego.size()) continue;
+    out << num(tr.ego[k].x) << " " << num(tr.ego[k].y) << "\n";
+    ++marks;
+  }
+  out << "EOD\n";
+  return marks;
+}
+
 void write_path_and_plot(std::ostream& out, const Trajectory& tr) {
   out << "$ego_path << EOD\n";
   for (const auto& s : tr.ego) out << num(s.x) << " " << num(s.y) << "\n";
   out << "EOD\n";
+  const int took_over = write_event_marks(out, tr, "took_over");
+  const int fell_back = write_event_marks(out, tr, "fallback");
   // keyentry gives the legend a swatch per car without plotting anything.
   out << "plot $ego_path using 1:2 with lines lw 2 lc rgb '" << kEgoStyle.color
       << "' title 'ego path'";
+  if (took_over > 0) {
+    out << ", \\\n     $took_over using 1:2 with points pt 7 ps 0.8 lc rgb '#000000' "
+           "title 'expert took over'";
+  }
+  if (fell_back > 0) {
+    out << ", \\\n     $fallback using 1:2 with points pt 6 ps 0.8 lc rgb '#7f7f7f' "
+           "title 'fallback'";
+  }
   const auto swatch = [&out](const CarStyle& style) {
     out << ", \\\n     keyentry with boxes fs solid 0.6 fc rgb '" << style.color << "' title "
         << gnuplot_string(style.name);

@@ -9,6 +9,7 @@
 #include <fstream>
 #include <iterator>
 #include <optional>
+#include <sstream>
 #include <string>
 #include <tuple>
 
@@ -129,6 +130,28 @@ TEST(PlotScript, DrawsLaneEdgesAndDashedCentreLine) {
   EXPECT_EQ(lower.find(" dt "), std::string::npos);
   EXPECT_EQ(upper.find(" dt "), std::string::npos);
   EXPECT_NE(script.find("set yrange [-3.5:7]"), std::string::npos);
+}
+
+// A rollout's take-over and fallback steps are marked where the ego was.
+TEST(PlotScript, MarksTheStepsWhereARolloutTookOverOrFellBack) {
+  Trajectory tr = lane_change();
+  EXPECT_EQ(trajectory_plot_script(tr, "out.png").find("took over"), std::string::npos);
+  tr.details["events"] = {{"took_over", {{{"step", 3}, {"reason", "r"}}}},
+                          {"fallback", nlohmann::json::array()}};
+  const std::string script = trajectory_plot_script(tr, "out.png");
+  EXPECT_NE(script.find("title 'expert took over'"), std::string::npos) << script;
+  EXPECT_EQ(script.find("title 'fallback'"), std::string::npos);  // no fallback step
+  const std::string opening = "$took_over << EOD\n";
+  const auto block = script.find(opening);
+  ASSERT_NE(block, std::string::npos);
+  const auto start = block + opening.size();
+  const std::string first_mark = script.substr(start, script.find('\n', start) - start);
+  std::istringstream in(first_mark);
+  double x = 0.0;
+  double y = 0.0;
+  in >> x >> y;
+  EXPECT_NEAR(x, tr.ego[3].x, 1e-3);  // the script keeps a few digits
+  EXPECT_NEAR(y, tr.ego[3].y, 1e-3);
 }
 
 TEST(PlotScript, DrawsEveryCarAtEverySnapshot) {
