@@ -12,11 +12,13 @@
 #include <thread>
 
 #include "common/json_fields.hpp"
+#include "data/rows.hpp"
 #include "lanechange/data/progress.hpp"
 #include "lanechange/error.hpp"
 #include "lanechange/planner/planner.hpp"
 #include "lanechange/sampler.hpp"
 #include "lanechange/sim/simulator.hpp"
+#include "sim/evaluation_files.hpp"
 
 namespace lanechange::sim {
 
@@ -27,12 +29,6 @@ namespace {
 
 constexpr std::string_view kEvaluationFormat = "lanechange.evaluation/1";
 constexpr const char* kManifest = "evaluation.json";
-
-std::string shard_file(long long shard) {
-  char name[40];
-  std::snprintf(name, sizeof name, "rollouts-%05lld.csv", shard);
-  return name;
-}
 
 json parameters_of(const EvaluateOptions& o) {
   return {{"count", o.count},
@@ -100,14 +96,6 @@ std::string number(double v) {
   return out.str();
 }
 
-std::string csv_text(const std::string& text) {
-  if (text.find_first_of(",\"\n") == std::string::npos) return text;
-  std::string quoted = "\"";
-  for (char c : text)
-    quoted += c == '"' ? std::string("\"\"") : std::string(1, c == '\n' ? ' ' : c);
-  return quoted + "\"";
-}
-
 std::string rollout_row(long long index, const Scenario& s, const std::string& planner,
                         const Rollout& r) {
   const RolloutMetrics& m = r.metrics;
@@ -123,7 +111,7 @@ std::string rollout_row(long long index, const Scenario& s, const std::string& p
     row += ',';
     row += number(v);
   }
-  return row + "," + csv_text(r.reason) + "\n";
+  return row + "," + data::detail::csv_field(r.reason) + "\n";
 }
 
 std::string header(const std::vector<std::string>& columns) {
@@ -147,10 +135,6 @@ std::vector<std::string> rollout_columns() {
           "max_step_ms", "reason"};
 }
 
-namespace detail {
-void write_results(const std::string& dir, long long shards);
-}  // namespace detail
-
 EvaluateReport evaluate(const EvaluateOptions& o, const EvaluateRun& run) {
   validate(o);
   const auto start = std::chrono::steady_clock::now();
@@ -163,7 +147,7 @@ EvaluateReport evaluate(const EvaluateOptions& o, const EvaluateRun& run) {
   }
   std::vector<long long> todo;
   for (long long s = 0; s < report.shards_total; ++s) {
-    if (fs::exists(fs::path(o.out_dir) / shard_file(s))) {
+    if (fs::exists(fs::path(o.out_dir) / detail::shard_file(s))) {
       ++report.shards_skipped;
     } else {
       todo.push_back(s);
@@ -199,7 +183,7 @@ EvaluateReport evaluate(const EvaluateOptions& o, const EvaluateRun& run) {
           }
         }
         lanechange::detail::write_file_atomically(
-            (fs::path(o.out_dir) / shard_file(shard)).string(), rows);
+            (fs::path(o.out_dir) / detail::shard_file(shard)).string(), rows);
       }
     } catch (...) {
       const std::lock_guard lock(error_mutex);

@@ -9,6 +9,7 @@
 #include "common/json_fields.hpp"
 #include "lanechange/error.hpp"
 #include "lanechange/sim/evaluate.hpp"
+#include "sim/evaluation_files.hpp"
 
 namespace lanechange::sim {
 
@@ -140,14 +141,19 @@ std::vector<std::string> summary_columns() {
 
 namespace detail {
 
+std::string shard_file(long long shard) {
+  char name[40];
+  std::snprintf(name, sizeof name, "rollouts-%05lld.csv", shard);
+  return name;
+}
+
 void write_results(const std::string& dir, long long shards) {
   std::string all;
   std::vector<Row> rows;
   for (long long s = 0; s < shards; ++s) {
-    char name[40];
-    std::snprintf(name, sizeof name, "rollouts-%05lld.csv", s);
+    const std::string name = shard_file(s);
     std::ifstream in(fs::path(dir) / name);
-    if (!in) throw InputError("", std::string(name) + " is missing in " + dir);
+    if (!in) throw InputError("", name + " is missing in " + dir);
     std::string line;
     std::getline(in, line);
     if (s == 0) all += line + "\n";

@@ -1,0 +1,14 @@
+#pragma once
+// The files of an evaluation directory (docs/closed_loop.md), shared by the
+// run (evaluate.cpp) and its tables (summary.cpp).
+#include <string>
+
+namespace lanechange::sim::detail {
+
+/// rollouts-SSSSS.csv: the rows of shard s.
+[[nodiscard]] std::string shard_file(long long shard);
+
+/// rollouts.csv (the shards in order) and summary.csv, from the shard files.
+void write_results(const std::string& dir, long long shards);
+
+}  // namespace lanechange::sim::detail
