@@ -71,6 +71,16 @@ inline CommandResult run_cli(const std::string& args) {
   return result;
 }
 
+/// The default config with a closed-loop step budget that never binds: under
+/// the sanitizers a re-plan can take longer than the 100 ms control period,
+/// and an overrun hands the step to the fallback, which would make outcomes
+/// depend on the machine.
+inline Config untimed_config() {
+  Config c;
+  c.closed_loop.step_budget_ms = 1e9;
+  return c;
+}
+
 /// Every car far away: a wide-open gap in the target lane.
 inline Scenario open_road_scenario(Behavior behavior = Behavior::ConstantSpeed) {
   Scenario s = default_scenario(Config{});

@@ -76,7 +76,7 @@ void expect_consistent(const sim::Rollout& r, const Scenario& s) {
 }
 
 TEST(ClosedLoop, ExpertChangesLanesIntoAWideOpenGap) {
-  const Config config;
+  const Config config = testing::untimed_config();
   const Scenario s = open_road();
   const auto miqp = planner::make_planner("miqp", config);
   const sim::Rollout r = sim::simulate(s, *miqp, config);
@@ -88,7 +88,7 @@ TEST(ClosedLoop, ExpertChangesLanesIntoAWideOpenGap) {
 }
 
 TEST(ClosedLoop, NoGapIsAbortedWithoutCollision) {
-  const Config config;
+  const Config config = testing::untimed_config();
   const Scenario s = no_gap();
   for (const char* name : {"miqp", "keep-lane"}) {
     const auto p = planner::make_planner(name, config);
@@ -101,7 +101,7 @@ TEST(ClosedLoop, NoGapIsAbortedWithoutCollision) {
 }
 
 TEST(ClosedLoop, SampledRolloutsAreConsistent) {
-  const Config config;
+  const Config config = testing::untimed_config();
   const ScenarioSampler sampler(config, 5);
   const auto miqp = planner::make_planner("miqp", config);
   for (std::uint64_t i = 0; i < 4; ++i) {
@@ -117,7 +117,7 @@ TEST(ClosedLoop, IdmFollowerBrakesForAnEgoThatCutsIn) {
   Scenario s = open_road(Behavior::Idm);
   s.follower = {-12.0, 9.0, 0.0};
   s.target = {60.0, 9.0, 0.0};
-  const Config config;
+  const Config config = testing::untimed_config();
   const ScriptedPlanner cut_in([](const Observation& o) {
     const double wanted = o.ego.y < 3.0 ? 0.2 : 0.0;
     return Decision{{0.0, 2.0 * (wanted - o.ego.theta)}, ActStatus::Planned, ""};

@@ -14,8 +14,8 @@ using sim::Outcome;
 constexpr int kWorthTrying = static_cast<int>(Label::WellPosed);
 
 MlpMiqpPlanner forced(MlpMiqpPlanner::Network network, int scene_class = kWorthTrying) {
-  return {Config{}, [scene_class](const Scenario&) { return scene_class; }, std::move(network),
-          std::make_shared<expert::FastLaneChangeSolver>()};
+  return {testing::untimed_config(), [scene_class](const Scenario&) { return scene_class; },
+          std::move(network), std::make_shared<expert::FastLaneChangeSolver>()};
 }
 
 // A "network" that steers hard into the target lane whatever is there.
@@ -24,7 +24,7 @@ EgoControl swerve_left(const Observation&) { return {0.0, 0.26}; }
 TEST(MlpMiqp, ANetworkSteeringIntoACarIsTakenOverAndNothingIsHit) {
   const Scenario s = testing::no_gap_scenario();
   const MlpMiqpPlanner p = forced(swerve_left);
-  const sim::Rollout r = sim::simulate(s, p, Config{});
+  const sim::Rollout r = sim::simulate(s, p, testing::untimed_config());
   EXPECT_GE(r.metrics.takeovers, 1);
   EXPECT_FALSE(r.trajectory.collision) << r.reason;
   // The expert finds no gap either, so the fallback keeps the ego lane.
@@ -41,14 +41,14 @@ TEST(MlpMiqp, ASceneClassedAsFailureIsNotTried) {
         return swerve_left(o);
       },
       static_cast<int>(Label::Failure));
-  const sim::Rollout r = sim::simulate(s, p, Config{});
+  const sim::Rollout r = sim::simulate(s, p, testing::untimed_config());
   EXPECT_EQ(r.outcome, Outcome::Aborted);
   EXPECT_EQ(calls, 0);
 }
 
 TEST(MlpMiqp, ANetworkThatDrivesWellIsNotOverruled) {
   // A lane keeper aimed at the target lane stands in for a good network.
-  const Config config;
+  const Config config = testing::untimed_config();
   const planner::LaneKeeper keeper(config);
   const MlpMiqpPlanner p = forced([&keeper](const Observation& o) {
     return keeper.control(o.ego, o.scene->lane_width, nullptr);
@@ -76,9 +76,11 @@ TEST(MlpMiqp, ATrainedModelDrivesTheLoopWithoutCollision) {
                                         dir.file("data") + " --out " + dir.file("model"));
   ASSERT_EQ(trained.exit_code, 0) << trained.output;
   testing::write_text(dir.file("s.json"), scenario_to_json(testing::open_road_scenario()).dump());
-  const auto run =
-      testing::run_cli("simulate --planner mlp-miqp --model " + dir.file("model") + " --scenario " +
-                       dir.file("s.json") + " --out " + dir.file("r.json"));
+  testing::write_text(dir.file("untimed.json"),
+                      nlohmann::json({{"closed_loop", {{"step_budget_ms", 1e9}}}}).dump());
+  const auto run = testing::run_cli(
+      "--config " + dir.file("untimed.json") + " simulate --planner mlp-miqp --model " +
+      dir.file("model") + " --scenario " + dir.file("s.json") + " --out " + dir.file("r.json"));
   ASSERT_EQ(run.exit_code, 0) << run.output;
   const auto rollout = nlohmann::json::parse(testing::read_text(dir.file("r.json")));
   EXPECT_EQ(rollout["planner"], "mlp-miqp");
