@@ -51,7 +51,6 @@ void validate(const EvaluateOptions& o) {
   require(!o.out_dir.empty(), "--out", "must name a directory");
   require(std::isfinite(o.duration) && o.duration >= 0, "--duration", "must be >= 0");
   o.config.validate();
-  for (const auto& name : o.planners) (void)planner::make_planner(name, o.config, o.model_dir);
 }
 
 // Creates the directory and its manifest, or checks that the manifest there
@@ -137,6 +136,12 @@ std::vector<std::string> rollout_columns() {
 
 EvaluateReport evaluate(const EvaluateOptions& o, const EvaluateRun& run) {
   validate(o);
+  // Built (and a model loaded) once, before the directory is touched, so an
+  // unknown planner or a bad model leaves it as it was.
+  std::vector<std::shared_ptr<const planner::ClosedLoopPlanner>> planners;
+  for (const auto& name : o.planners) {
+    planners.push_back(planner::make_planner(name, o.config, o.model_dir));
+  }
   const auto start = std::chrono::steady_clock::now();
   const json parameters = parameters_of(o);
   EvaluateReport report;
@@ -152,10 +157,6 @@ EvaluateReport evaluate(const EvaluateOptions& o, const EvaluateRun& run) {
     } else {
       todo.push_back(s);
     }
-  }
-  std::vector<std::shared_ptr<const planner::ClosedLoopPlanner>> planners;
-  for (const auto& name : o.planners) {
-    planners.push_back(planner::make_planner(name, o.config, o.model_dir));
   }
   const ScenarioSampler sampler(o.config, o.seed);
   const auto per_shard = static_cast<long long>(planners.size());
