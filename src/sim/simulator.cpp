@@ -26,7 +26,6 @@ class Loop {
       : scene_(scene), config_(config), traffic_(scene, config), keeper_(config) {
     ego_ = scene.ego;
     dt_ = scene.horizon / scene.steps;
-    path_.planner = "";
     path_.dt = dt_;
     path_.lane_width = scene.lane_width;
     path_.others.dt = dt_;
