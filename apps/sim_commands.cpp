@@ -5,13 +5,26 @@
 #include <iostream>
 #include <sstream>
 
-#include "lanechange/planner/planner.hpp"
+#include "lanechange/baselines/baselines.hpp"
 #include "lanechange/scenario.hpp"
 #include "lanechange/sim/evaluate.hpp"
 #include "lanechange/sim/simulator.hpp"
 #include "lanechange/trajectory.hpp"
 
 namespace lanechange::app {
+
+namespace {
+
+std::string planner_help() {
+  std::string names;
+  for (const auto& name : baselines::planner_names()) {
+    if (!names.empty()) names += ", ";
+    names += name;
+  }
+  return names;
+}
+
+}  // namespace
 
 void add_simulate(CLI::App& app, ConfigSource config_source) {
   auto* cmd = app.add_subcommand("simulate", "Run one closed-loop rollout of a planner");
@@ -21,7 +34,7 @@ void add_simulate(CLI::App& app, ConfigSource config_source) {
   static std::string model_dir;
   static std::string out_path = "-";
   cmd->add_option("--scenario", scenario_path, "Scenario JSON file")->required();
-  cmd->add_option("--planner", planner_name, "Planner: miqp, mlp-miqp or keep-lane");
+  cmd->add_option("--planner", planner_name, "Planner: " + planner_help());
   cmd->add_option("--model", model_dir, "Model directory (lanechange train), for mlp-miqp");
   cmd->add_option("--duration", duration,
                   "Seconds to simulate (default: the horizon plus closed_loop.settle_time)")
@@ -30,7 +43,7 @@ void add_simulate(CLI::App& app, ConfigSource config_source) {
   cmd->callback([config_source] {
     const Config config = config_source();
     const Scenario scenario = load_scenario(scenario_path, config);
-    const auto planner = planner::make_planner(planner_name, config, model_dir);
+    const auto planner = baselines::make_planner(planner_name, config, model_dir);
     const sim::Rollout rollout = sim::simulate(scenario, *planner, config, {duration});
     sim::save_rollout(rollout, out_path);
     const auto& m = rollout.metrics;
@@ -52,8 +65,7 @@ void add_evaluate(CLI::App& app, ConfigSource config_source) {
   cmd->add_option("--count", o.count, "How many sampled scenarios")->required();
   cmd->add_option("--seed", o.seed, "Sampler seed")->required();
   cmd->add_option("--behavior", behavior, "constant_speed, constant_accel, idm or all");
-  cmd->add_option("--planner", planners,
-                  "Planner names, comma-separated (miqp, mlp-miqp, keep-lane)");
+  cmd->add_option("--planner", planners, "Planner names, comma-separated: " + planner_help());
   cmd->add_option("--model", o.model_dir, "Model directory (lanechange train), for mlp-miqp");
   cmd->add_option("--out", o.out_dir, "Output directory; rerun the command to resume")->required();
   cmd->add_option("--jobs", jobs, "Worker threads (default: all cores)")
@@ -62,6 +74,7 @@ void add_evaluate(CLI::App& app, ConfigSource config_source) {
   cmd->add_option("--duration", o.duration, "Seconds per rollout (default: horizon + settle)");
   cmd->callback([config_source] {
     o.config = config_source();
+    o.make_planner = baselines::make_planner;
     o.behavior.reset();
     if (behavior != "all") o.behavior = behavior_from_string(behavior, "--behavior");
     o.planners.clear();

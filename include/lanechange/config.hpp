@@ -190,6 +190,15 @@ struct ClosedLoopSettings {
   double lookahead = 1.0;             ///< s the hierarchical planner checks its policy ahead
 };
 
+/// The paper's MPC baseline (docs/baselines.md, "mpc").
+struct MpcSettings {};
+
+/// The dynamic window approach (docs/baselines.md, "dwa").
+struct DwaSettings {};
+
+/// The Frenet lattice planner of Werling et al. 2010 (docs/baselines.md, "lattice").
+struct LatticeSettings {};
+
 struct Config {
   std::string preset = "paper";
   double lane_width = 3.75;  ///< m
@@ -203,6 +212,9 @@ struct Config {
   LabelTolerances labels;
   SamplerSettings sampler;
   ClosedLoopSettings closed_loop;
+  MpcSettings mpc;
+  DwaSettings dwa;
+  LatticeSettings lattice;
 
   [[nodiscard]] double dt() const { return expert.horizon / expert.steps; }
   /// Throws InputError when a value is non-finite or out of its physical range.

@@ -140,6 +140,16 @@ void visit_fields(V& v, S& s) requires std::same_as<std::remove_const_t<S>, Samp
 }
 
 template <class V, class S>
+void visit_fields(V& /*v*/, S& /*s*/) requires std::same_as<std::remove_const_t<S>, MpcSettings> {}
+
+template <class V, class S>
+void visit_fields(V& /*v*/, S& /*s*/) requires std::same_as<std::remove_const_t<S>, DwaSettings> {}
+
+template <class V, class S>
+void visit_fields(V& /*v*/,
+                  S& /*s*/) requires std::same_as<std::remove_const_t<S>, LatticeSettings> {}
+
+template <class V, class S>
 void visit_fields(V& v, S& s) requires std::same_as<std::remove_const_t<S>, Config> {
   v("preset", s.preset);
   v("lane_width", s.lane_width);
@@ -153,6 +163,9 @@ void visit_fields(V& v, S& s) requires std::same_as<std::remove_const_t<S>, Conf
   v("labels", s.labels);
   v("sampler", s.sampler);
   v("closed_loop", s.closed_loop);
+  v("mpc", s.mpc);
+  v("dwa", s.dwa);
+  v("lattice", s.lattice);
 }
 
 }  // namespace lanechange

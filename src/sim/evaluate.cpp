@@ -140,7 +140,7 @@ EvaluateReport evaluate(const EvaluateOptions& o, const EvaluateRun& run) {
   // unknown planner or a bad model leaves it as it was.
   std::vector<std::shared_ptr<const planner::ClosedLoopPlanner>> planners;
   for (const auto& name : o.planners) {
-    planners.push_back(planner::make_planner(name, o.config, o.model_dir));
+    planners.push_back(o.make_planner(name, o.config, o.model_dir));
   }
   const auto start = std::chrono::steady_clock::now();
   const json parameters = parameters_of(o);

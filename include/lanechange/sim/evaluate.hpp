@@ -4,15 +4,23 @@
 // kill. Writes rollouts.csv (a row per scenario and planner) and summary.csv
 // (rates and percentiles per planner and behavior).
 #include <cstdint>
+#include <functional>
+#include <memory>
 #include <optional>
 #include <ostream>
 #include <string>
 #include <vector>
 
 #include "lanechange/config.hpp"
+#include "lanechange/planner/planner.hpp"
 #include "lanechange/scenario.hpp"
 
 namespace lanechange::sim {
+
+/// Builds a planner by name; throws InputError for an unknown one. Later
+/// stages (the baselines) know more planners than planner::make_planner.
+using PlannerFactory = std::function<std::shared_ptr<const planner::ClosedLoopPlanner>(
+    std::string_view name, const Config& config, const std::string& model_dir)>;
 
 struct EvaluateOptions {
   long long count = 0;
@@ -24,6 +32,7 @@ struct EvaluateOptions {
   long long shard_size = 20;
   double duration = 0.0;  ///< s per rollout; 0: horizon + settle time
   Config config;
+  PlannerFactory make_planner = planner::make_planner;
 };
 
 struct EvaluateRun {
