@@ -106,20 +106,12 @@ std::string rollout_row(long long index, const Scenario& s, const std::string& p
     row += std::to_string(v);
   }
   for (double v : {m.time_to_target_lane >= 0 ? m.time_to_target_lane : NAN, m.min_gap, m.min_ttc,
-                   m.max_abs_accel, m.rms_jerk, m.max_abs_omega, m.median_step_ms, m.max_step_ms}) {
+                   m.max_abs_accel, m.rms_jerk, m.max_abs_omega, m.median_step_ms, m.p99_step_ms,
+                   m.max_step_ms}) {
     row += ',';
     row += number(v);
   }
   return row + "," + data::detail::csv_field(r.reason) + "\n";
-}
-
-std::string header(const std::vector<std::string>& columns) {
-  std::string line;
-  for (const auto& c : columns) {
-    if (!line.empty()) line += ',';
-    line += c;
-  }
-  return line + "\n";
 }
 
 }  // namespace
@@ -131,7 +123,7 @@ std::vector<std::string> rollout_columns() {
           "failures",    "clipped",       "time_to_target_lane",
           "min_gap",     "min_ttc",       "max_abs_accel",
           "rms_jerk",    "max_abs_omega", "median_step_ms",
-          "max_step_ms", "reason"};
+          "p99_step_ms", "max_step_ms",   "reason"};
 }
 
 EvaluateReport evaluate(const EvaluateOptions& o, const EvaluateRun& run) {
@@ -172,7 +164,7 @@ EvaluateReport evaluate(const EvaluateOptions& o, const EvaluateRun& run) {
     try {
       for (std::size_t i = next++; i < todo.size(); i = next++) {
         const long long shard = todo[i];
-        std::string rows = header(rollout_columns());
+        std::string rows = detail::csv_header(rollout_columns());
         const long long first = shard * o.shard_size;
         for (long long index = first; index < std::min(o.count, first + o.shard_size); ++index) {
           const Scenario s = sampler.sample(static_cast<std::uint64_t>(index), o.behavior);

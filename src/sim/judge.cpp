@@ -71,11 +71,13 @@ void traffic_measures(const Trajectory& t, const Scenario& scene, RolloutMetrics
   }
 }
 
-double median(std::vector<double> v) {
+// Nearest rank; 0 for no values (a rollout whose planner never acted).
+double quantile(std::vector<double> v, double q) {
   if (v.empty()) return 0.0;
-  const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
-  std::nth_element(v.begin(), mid, v.end());
-  return *mid;
+  const auto rank = static_cast<std::size_t>(std::ceil(q * static_cast<double>(v.size())));
+  const auto at = v.begin() + static_cast<std::ptrdiff_t>(std::max<std::size_t>(rank, 1) - 1);
+  std::nth_element(v.begin(), at, v.end());
+  return *at;
 }
 
 }  // namespace
@@ -117,7 +119,8 @@ RolloutMetrics measure(const Rollout& rollout, const Scenario& scene, const Conf
     m.overruns += s.overrun ? 1 : 0;
   }
   for (const StepRecord& s : rollout.steps) m.clipped += s.clipped ? 1 : 0;
-  m.median_step_ms = median(ms);
+  m.median_step_ms = quantile(ms, 0.5);
+  m.p99_step_ms = quantile(ms, 0.99);
   return m;
 }
 

@@ -38,6 +38,7 @@ json rollout_to_json(const Rollout& r) {
   out["outcome"] = to_string(r.outcome);
   out["collision_at_fault"] = r.collision_at_fault;
   out["compute_ms"]["median_step"] = m.median_step_ms;
+  out["compute_ms"]["p99_step"] = m.p99_step_ms;
   json per_step = json::array();
   for (const StepRecord& s : r.steps) per_step.push_back(s.compute_ms);
   out["compute_ms"]["steps"] = per_step;

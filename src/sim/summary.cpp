@@ -17,43 +17,45 @@ namespace fs = std::filesystem;
 
 namespace {
 
-struct Row {
-  std::string behavior, planner, outcome;
-  bool collision = false;
-  bool at_fault = false;
-  double takeovers = 0, fallbacks = 0, overruns = 0;
-  double time_to_target_lane = NAN, min_ttc = NAN, max_abs_accel = 0, rms_jerk = 0;
-  double median_step_ms = 0, max_step_ms = 0;
-};
+double cell_number(const std::string& cell) { return cell.empty() ? NAN : std::stod(cell); }
 
-double field(const std::vector<std::string>& f, std::size_t i) {
-  return i < f.size() && !f[i].empty() ? std::stod(f[i]) : NAN;
-}
-
-Row parse(const std::string& line) {
+RolloutRow parse(const std::string& line) {
   std::vector<std::string> f;
   std::stringstream in(line);
-  // The reason is last and may hold commas: split only the columns before it.
-  for (std::string cell; f.size() + 1 < rollout_columns().size() && std::getline(in, cell, ',');) {
+  // The reason is last and may hold commas (quoted): split only the columns before it.
+  const std::size_t before_reason = rollout_columns().size() - 1;
+  for (std::string cell; f.size() < before_reason && std::getline(in, cell, ',');) {
     f.push_back(cell);
   }
-  Row r;
-  r.behavior = f.at(1);
-  r.planner = f.at(2);
-  r.outcome = f.at(3);
-  r.collision = f.at(4) == "1";
-  r.at_fault = f.at(5) == "1";
-  r.takeovers = field(f, 6);
-  r.fallbacks = field(f, 7);
-  r.overruns = field(f, 8);
-  r.time_to_target_lane = field(f, 11);
-  r.min_ttc = field(f, 13);
-  r.max_abs_accel = field(f, 14);
-  r.rms_jerk = field(f, 15);
-  r.median_step_ms = field(f, 17);
-  r.max_step_ms = field(f, 18);
+  if (f.size() < before_reason) throw std::invalid_argument("too few columns");
+  std::string reason;
+  std::getline(in, reason);
+  if (reason.size() >= 2 && reason.front() == '"') {
+    std::string unquoted;
+    for (std::size_t i = 1; i + 1 < reason.size(); ++i) {
+      unquoted += reason[i];
+      if (reason[i] == '"') ++i;  // "" stands for one quote
+    }
+    reason = unquoted;
+  }
+  RolloutRow r;
+  r.index = std::stoll(f[0]);
+  r.behavior = f[1];
+  r.planner = f[2];
+  r.outcome = f[3];
+  r.collision = f[4] == "1";
+  r.at_fault = f[5] == "1";
+  double* numbers[] = {
+      &r.takeovers,           &r.fallbacks,      &r.overruns,    &r.failures,      &r.clipped,
+      &r.time_to_target_lane, &r.min_gap,        &r.min_ttc,     &r.max_abs_accel, &r.rms_jerk,
+      &r.max_abs_omega,       &r.median_step_ms, &r.p99_step_ms, &r.max_step_ms};
+  std::size_t column = 6;
+  for (double* value : numbers) *value = cell_number(f[column++]);
+  r.reason = reason;
   return r;
 }
+
+using Row = RolloutRow;
 
 // Nearest-rank percentile of the finite values; NaN without any.
 double percentile(std::vector<double> v, double q) {
@@ -117,6 +119,28 @@ std::string summary_row(const std::string& planner, const std::string& behavior,
 
 }  // namespace
 
+std::vector<RolloutRow> read_rollouts(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw InputError(path, "cannot open the rollouts file");
+  std::string line;
+  std::getline(in, line);
+  if (line + "\n" != detail::csv_header(rollout_columns())) {
+    throw InputError(path, "is not a rollouts file of this version (its header differs)");
+  }
+  std::vector<RolloutRow> rows;
+  long long number = 1;
+  while (std::getline(in, line)) {
+    ++number;
+    if (line.empty()) continue;
+    try {
+      rows.push_back(parse(line));
+    } catch (const std::exception&) {
+      throw InputError(path, "line " + std::to_string(number) + " is malformed");
+    }
+  }
+  return rows;
+}
+
 std::vector<std::string> summary_columns() {
   return {"planner",
           "behavior",
@@ -141,6 +165,15 @@ std::vector<std::string> summary_columns() {
 
 namespace detail {
 
+std::string csv_header(const std::vector<std::string>& columns) {
+  std::string line;
+  for (const auto& c : columns) {
+    if (!line.empty()) line += ',';
+    line += c;
+  }
+  return line + "\n";
+}
+
 std::string shard_file(long long shard) {
   char name[40];
   std::snprintf(name, sizeof name, "rollouts-%05lld.csv", shard);
@@ -148,20 +181,18 @@ std::string shard_file(long long shard) {
 }
 
 void write_results(const std::string& dir, long long shards) {
-  std::string all;
+  std::string all = detail::csv_header(rollout_columns());
   std::vector<Row> rows;
   for (long long s = 0; s < shards; ++s) {
-    const std::string name = shard_file(s);
-    std::ifstream in(fs::path(dir) / name);
-    if (!in) throw InputError("", name + " is missing in " + dir);
+    const std::string path = (fs::path(dir) / shard_file(s)).string();
+    if (!fs::exists(path)) throw InputError("", shard_file(s) + " is missing in " + dir);
+    std::ifstream in(path);
     std::string line;
     std::getline(in, line);
-    if (s == 0) all += line + "\n";
     while (std::getline(in, line)) {
-      if (line.empty()) continue;
-      all += line + "\n";
-      rows.push_back(parse(line));
+      if (!line.empty()) all += line + "\n";
     }
+    for (auto& row : read_rollouts(path)) rows.push_back(std::move(row));
   }
   lanechange::detail::write_file_atomically((fs::path(dir) / "rollouts.csv").string(), all);
   std::map<std::pair<std::string, std::string>, std::vector<const Row*>> groups;
@@ -171,12 +202,7 @@ void write_results(const std::string& dir, long long shards) {
     groups[{r.planner, r.behavior}].push_back(&r);
     groups[{r.planner, "all"}].push_back(&r);
   }
-  std::string text;
-  for (const auto& c : summary_columns()) {
-    if (!text.empty()) text += ',';
-    text += c;
-  }
-  text += "\n";
+  std::string text = csv_header(summary_columns());
   for (const std::string& planner : order) {
     for (const auto& [key, members] : groups) {
       if (key.first == planner) text += summary_row(key.first, key.second, members);

@@ -24,7 +24,7 @@ std::string without_times(const std::string& row) {
   for (std::string c; std::getline(in, c, ',');) cells.push_back(c);
   std::string out;
   for (std::size_t i = 0; i < cells.size(); ++i) {
-    if (i == 17 || i == 18) continue;  // median_step_ms, max_step_ms
+    if (i >= 17 && i <= 19) continue;  // median_step_ms, p99_step_ms, max_step_ms
     out += cells[i] + "|";
   }
   return out;
@@ -87,6 +87,32 @@ TEST(Evaluate, AKilledRunResumesToTheSameRowsAndOtherParametersAreRefused) {
   other.seed = 5;
   EXPECT_THROW((void)sim::evaluate(other, {1, nullptr, false}), InputError);
   EXPECT_EQ(lines_of(dir.file("ev/rollouts.csv")), resumed);  // untouched
+}
+
+TEST(Evaluate, RolloutsReadBackAsWrittenAndAForeignFileIsNamed) {
+  testing::TempDir dir;
+  const auto o = small(dir.file("ev"));
+  (void)sim::evaluate(o, {2, nullptr, false});
+  const auto rows = sim::read_rollouts(dir.file("ev/rollouts.csv"));
+  ASSERT_EQ(rows.size() + 1, lines_of(dir.file("ev/rollouts.csv")).size());
+  for (const auto& row : rows) {
+    EXPECT_LE(row.median_step_ms, row.p99_step_ms);
+    EXPECT_LE(row.p99_step_ms, row.max_step_ms);
+    EXPECT_FALSE(row.reason.empty());
+    if (row.planner == "keep-lane") {
+      EXPECT_EQ(row.outcome, "aborted");
+    }
+  }
+  testing::write_text(dir.file("bad.csv"), "index,behavior\n1,idm\n");
+  try {
+    (void)sim::read_rollouts(dir.file("bad.csv"));
+    ADD_FAILURE() << "a foreign file was read";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("bad.csv"), std::string::npos);
+  }
+  auto text = testing::read_text(dir.file("ev/rollouts.csv"));
+  testing::write_text(dir.file("short.csv"), text + "7,idm,miqp\n");
+  EXPECT_THROW((void)sim::read_rollouts(dir.file("short.csv")), InputError);
 }
 
 TEST(Evaluate, CliRefusesBadInputWithTwo) {

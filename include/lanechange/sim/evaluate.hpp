@@ -52,6 +52,22 @@ struct EvaluateReport {
 /// output directory that holds another evaluation (left untouched).
 EvaluateReport evaluate(const EvaluateOptions& options, const EvaluateRun& run);
 
+/// One row of rollouts.csv (docs/closed_loop.md); NaN where the cell is empty.
+struct RolloutRow {
+  long long index = 0;
+  std::string behavior, planner, outcome, reason;
+  bool collision = false;
+  bool at_fault = false;
+  double takeovers = 0, fallbacks = 0, overruns = 0, failures = 0, clipped = 0;
+  double time_to_target_lane = 0, min_gap = 0, min_ttc = 0, max_abs_accel = 0, rms_jerk = 0;
+  double max_abs_omega = 0, median_step_ms = 0, p99_step_ms = 0, max_step_ms = 0;
+  [[nodiscard]] bool success() const { return outcome == "well_posed" && !collision; }
+};
+
+/// Reads a rollouts.csv (or one of its shards). InputError naming the file
+/// for a missing file, a header that is not ours, or a malformed row.
+[[nodiscard]] std::vector<RolloutRow> read_rollouts(const std::string& path);
+
 /// The column names of rollouts.csv and summary.csv.
 [[nodiscard]] std::vector<std::string> rollout_columns();
 [[nodiscard]] std::vector<std::string> summary_columns();

@@ -48,6 +48,7 @@ struct RolloutMetrics {
   double rms_jerk = 0.0;  ///< m/s^3, of the applied acceleration
   double max_abs_omega = 0.0;
   double median_step_ms = 0.0;
+  double p99_step_ms = 0.0;
   double max_step_ms = 0.0;
   int takeovers = 0;
   int fallbacks = 0;
