@@ -18,6 +18,7 @@
 #include "lanechange/plot.hpp"
 #include "lanechange/sampler.hpp"
 #include "lanechange/scenario.hpp"
+#include "experiments_command.hpp"
 #include "sim_commands.hpp"
 #include "learn_commands.hpp"
 
@@ -356,6 +357,7 @@ int main(int argc, char** argv) {
   lc::app::add_simulate(app, [&global] { return global.config(); });
   lc::app::add_evaluate(app, [&global] { return global.config(); });
   lc::app::add_train(app);
+  lc::app::add_experiments(app, [&global] { return global.config(); });
   lc::app::add_model_info(app);
   try {
     app.parse(argc, argv);

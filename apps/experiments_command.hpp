@@ -1,0 +1,10 @@
+#pragma once
+#include <CLI/CLI.hpp>
+
+#include "data_commands.hpp"
+
+namespace lanechange::app {
+
+void add_experiments(CLI::App& app, ConfigSource config);
+
+}  // namespace lanechange::app

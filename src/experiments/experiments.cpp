@@ -1,0 +1,340 @@
+#include "lanechange/experiments/experiments.hpp"
+
+#include <sys/utsname.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <set>
+#include <thread>
+
+#include "common/json_fields.hpp"
+#include "experiments/document.hpp"
+#include "experiments/figures.hpp"
+#include "experiments/report.hpp"
+#include "experiments/stages.hpp"
+#include "experiments/tables.hpp"
+#include "lanechange/baselines/baselines.hpp"
+#include "lanechange/data/dataset.hpp"
+#include "lanechange/error.hpp"
+#include "lanechange/learn/train.hpp"
+#include "lanechange/plot.hpp"
+#include "lanechange/sampler.hpp"
+#include "lanechange/sim/evaluate.hpp"
+#include "lanechange/sim/simulator.hpp"
+
+namespace lanechange::experiments {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+const std::vector<Behavior> kBehaviors = {Behavior::ConstantSpeed, Behavior::ConstantAccel,
+                                          Behavior::Idm};
+// Learning and evaluation never share scenes: other seeds.
+constexpr std::uint64_t kDataSeed = 101;
+constexpr std::uint64_t kEvalSeed = 2026;
+constexpr std::uint64_t kTrainSeed = 1;
+constexpr double kTestShare = 0.2;  // the paper's 1000 of 5000
+
+std::uint64_t seed_of(std::uint64_t base, std::size_t behavior) { return base + behavior; }
+
+std::string behavior_name(Behavior b) { return std::string(to_string(b)); }
+
+// The planners whose plans depend on the expert's lane rule.
+bool uses_the_expert(const std::string& planner) {
+  return planner == "miqp" || planner == "mlp-miqp";
+}
+
+std::vector<std::string> default_planners() {
+  std::vector<std::string> planners = {"mlp-miqp", "miqp"};
+  for (auto& name : baselines::baseline_names()) planners.push_back(std::move(name));
+  planners.emplace_back("keep-lane");
+  return planners;
+}
+
+void validate(const ExperimentOptions& o, const std::vector<std::string>& planners) {
+  if (o.out_dir.empty()) throw InputError("--out", "must name a directory");
+  if (o.eval_count < 0) throw InputError("--eval-count", "must not be negative");
+  o.config.validate();
+  const auto known = baselines::planner_names();
+  for (const auto& p : planners) {
+    if (std::find(known.begin(), known.end(), p) == known.end()) {
+      std::string problem = "unknown planner \"";
+      problem += p;
+      problem += "\"";
+      throw InputError("--planners", problem);
+    }
+  }
+  if (fs::exists(o.out_dir) && !fs::is_directory(o.out_dir)) {
+    throw InputError("--out", "exists and is not a directory");
+  }
+}
+
+struct Context {
+  const ExperimentOptions& options;
+  ExperimentSizes sizes;
+  std::vector<std::string> planners;
+  fs::path dir;
+  json base_inputs;
+};
+
+std::string path_in(const Context& c, const std::string& relative) {
+  return (c.dir / relative).string();
+}
+
+std::vector<std::string> per_behavior_dirs(const Context& c, const std::string& parent) {
+  std::vector<std::string> dirs;
+  for (Behavior b : kBehaviors) dirs.push_back(path_in(c, parent + "/" + behavior_name(b)));
+  return dirs;
+}
+
+void generate_sets(const Context& c, const std::string& parent, std::uint64_t seed,
+                   long long count) {
+  for (std::size_t i = 0; i < kBehaviors.size(); ++i) {
+    data::GenerateOptions g;
+    g.count = count;
+    g.seed = seed_of(seed, i);
+    g.behavior = kBehaviors[i];
+    g.out_dir = per_behavior_dirs(c, parent)[i];
+    g.shard_size = std::max<long long>(1, std::min<long long>(200, count / 4));
+    g.config = c.options.config;
+    data::RunOptions run;
+    run.jobs = c.options.jobs;
+    run.progress = c.options.progress;
+    run.progress_on_terminal = c.options.progress_on_terminal;
+    data::Team alone;
+    (void)data::generate(g, run, alone);
+  }
+}
+
+void evaluate_sets(const Context& c, const std::string& parent, const Config& config,
+                   const std::vector<std::string>& planners) {
+  for (std::size_t i = 0; i < kBehaviors.size(); ++i) {
+    sim::EvaluateOptions e;
+    e.count = c.sizes.eval_per_behavior;
+    e.seed = seed_of(kEvalSeed, i);
+    e.behavior = kBehaviors[i];
+    e.planners = planners;
+    e.model_dir = path_in(c, "model");
+    e.out_dir = per_behavior_dirs(c, parent)[i];
+    e.shard_size = std::max<long long>(1, std::min<long long>(20, e.count / 4));
+    e.config = config;
+    e.make_planner = baselines::make_planner;
+    sim::EvaluateRun run;
+    run.jobs = c.options.jobs;
+    run.progress = c.options.progress;
+    run.progress_on_terminal = c.options.progress_on_terminal;
+    (void)sim::evaluate(e, run);
+  }
+}
+
+std::vector<sim::RolloutRow> read_all_rollouts(const Context& c, const std::string& parent) {
+  std::vector<sim::RolloutRow> rows;
+  for (const auto& dir : per_behavior_dirs(c, parent)) {
+    for (auto& row : sim::read_rollouts(dir + "/rollouts.csv")) rows.push_back(std::move(row));
+  }
+  return rows;
+}
+
+Scenario eval_scene(const Context& c, const std::string& behavior, long long index) {
+  for (std::size_t i = 0; i < kBehaviors.size(); ++i) {
+    if (behavior_name(kBehaviors[i]) != behavior) continue;
+    const ScenarioSampler sampler(c.options.config, seed_of(kEvalSeed, i));
+    return sampler.sample(static_cast<std::uint64_t>(index), kBehaviors[i]);
+  }
+  throw InputError("behavior", "unknown behavior " + behavior);
+}
+
+// The scenes of the example figures: the most congested one the expert
+// masters (the paper's Fig. 4) and three the expert plans ill-posed (Fig. 5).
+std::vector<ExampleScene> example_scenes(const Context& c, const std::vector<sim::RolloutRow>& rows,
+                                         const ExpertLabels& labels) {
+  std::vector<ExampleScene> scenes;
+  double tightest = 1e300;
+  ExampleScene congested;
+  for (const auto& r : rows) {
+    if (r.planner != "miqp" || !r.success()) continue;
+    const Scenario s = eval_scene(c, r.behavior, r.index);
+    const double gap = s.target.x - s.follower.x - s.vehicle.length;
+    if (gap < tightest) {
+      tightest = gap;
+      congested = {"congested", r.behavior, r.index, "the tightest gap the expert masters"};
+    }
+  }
+  if (!congested.name.empty()) scenes.push_back(congested);
+  std::set<std::pair<std::string, long long>> evaluated;
+  for (const auto& r : rows) evaluated.insert({r.behavior, r.index});
+  int ill_posed = 0;
+  for (const auto& [key, label] : labels) {
+    if (label != "ill_posed" || evaluated.count(key) == 0) continue;
+    if (!scenes.empty() && scenes.front().behavior == key.first &&
+        scenes.front().index == key.second) {
+      continue;  // already the congested example
+    }
+    scenes.push_back({"ill_posed_" + std::to_string(++ill_posed), key.first, key.second,
+                      "planned ill-posed by the expert, open loop"});
+    if (scenes.size() == 4) break;
+  }
+  return scenes;
+}
+
+void draw_examples(const Context& c, const std::vector<ExampleScene>& scenes) {
+  for (const auto& scene : scenes) {
+    const Scenario s = eval_scene(c, scene.behavior, scene.index);
+    for (const auto& planner_name : c.planners) {
+      if (planner_name == "keep-lane") continue;
+      const auto planner =
+          baselines::make_planner(planner_name, c.options.config, path_in(c, "model"));
+      const sim::Rollout rollout = sim::simulate(s, *planner, c.options.config);
+      const std::string stem = path_in(c, "figures/" + scene.name + "_" + planner_name);
+      sim::save_rollout(rollout, stem + ".json");
+      PlotOptions plot;
+      plot.vehicle = s.vehicle;
+      plot_trajectory(rollout.trajectory, stem + ".png", plot);
+    }
+  }
+}
+
+void draw_summary_figures(const Context& c, const std::vector<sim::RolloutRow>& rows) {
+  plot_success_bars(rows, c.planners, path_in(c, "figures/success.png"));
+  plot_step_times(rows, c.planners, path_in(c, "figures/step_times.png"));
+  const fs::path confusion = c.dir / "model" / "confusion_plain_svm.png";
+  if (fs::exists(confusion)) {
+    fs::copy_file(confusion, c.dir / "figures" / "confusion_svm.png",
+                  fs::copy_options::overwrite_existing);
+  }
+}
+
+}  // namespace
+
+std::string_view to_string(Scale scale) {
+  switch (scale) {
+    case Scale::Tiny: return "tiny";
+    case Scale::Small: return "small";
+    case Scale::Paper: return "paper";
+  }
+  return "?";
+}
+
+Scale scale_from_string(std::string_view name, std::string_view field) {
+  for (Scale s : {Scale::Tiny, Scale::Small, Scale::Paper}) {
+    if (to_string(s) == name) return s;
+  }
+  std::string problem = "unknown scale \"";
+  problem += name;
+  problem += "\" (known: tiny, small, paper)";
+  throw InputError(std::string(field), problem);
+}
+
+ExperimentSizes sizes_of(Scale scale) {
+  switch (scale) {
+    case Scale::Tiny: return {12, 2, true, 20};
+    case Scale::Small: return {150, 20, true, 150};
+    case Scale::Paper: return {5000, 500, false, 300};
+  }
+  return {};
+}
+
+ExperimentReport run_experiments(const ExperimentOptions& o) {
+  const auto planners = o.planners.empty() ? default_planners() : o.planners;
+  validate(o, planners);
+  const auto start = std::chrono::steady_clock::now();
+  Context c{o, sizes_of(o.scale), planners, fs::path(o.out_dir), {}};
+  if (o.eval_count > 0) c.sizes.eval_per_behavior = o.eval_count;
+  fs::create_directories(c.dir);
+  json config;
+  to_json(config, o.config);
+  c.base_inputs = {{"code_version", code_version()}, {"config", config}};
+  StageRunner stages(o.out_dir, o.progress);
+
+  const std::string data = stages.run(
+      "data", {{"base", c.base_inputs}, {"count", c.sizes.data_per_behavior}, {"seed", kDataSeed}},
+      {"data"}, [&] { generate_sets(c, "data", kDataSeed, c.sizes.data_per_behavior); });
+  const std::string models = stages.run("models",
+                                        {{"data", data},
+                                         {"seed", kTrainSeed},
+                                         {"test_share", kTestShare},
+                                         {"quick", c.sizes.quick_search},
+                                         {"max_epochs", c.sizes.max_epochs},
+                                         {"figures", o.figures}},
+                                        {"model"}, [&] {
+                                          learn::TrainOptions t;
+                                          t.data_dirs = per_behavior_dirs(c, "data");
+                                          t.out_dir = path_in(c, "model");
+                                          t.seed = kTrainSeed;
+                                          t.test_share = kTestShare;
+                                          t.jobs = o.jobs;
+                                          t.search.quick = c.sizes.quick_search;
+                                          t.network.max_epochs = c.sizes.max_epochs;
+                                          t.plots = o.figures;
+                                          t.progress = o.progress;
+                                          (void)learn::train_models(t);
+                                        });
+  const std::string labels = stages.run(
+      "expert-labels",
+      {{"base", c.base_inputs}, {"count", c.sizes.eval_per_behavior}, {"seed", kEvalSeed}},
+      {"labels"}, [&] { generate_sets(c, "labels", kEvalSeed, c.sizes.eval_per_behavior); });
+  json eval_inputs = {{"base", c.base_inputs},
+                      {"models", models},
+                      {"count", c.sizes.eval_per_behavior},
+                      {"seed", kEvalSeed},
+                      {"planners", planners}};
+  const std::string footprint =
+      stages.run("evaluate-footprint", eval_inputs, {"eval/footprint"},
+                 [&] { evaluate_sets(c, "eval/footprint", o.config, planners); });
+  // The baselines know no lane rule: their rows are those of the default run.
+  std::vector<std::string> expert_planners;
+  for (const auto& p : planners) {
+    if (uses_the_expert(p)) expert_planners.push_back(p);
+  }
+  Config either_or = o.config;
+  either_or.expert.lane_rule = LaneRule::EitherOr;
+  eval_inputs["lane_rule"] = "either_or";
+  eval_inputs["planners"] = expert_planners;
+  if (!expert_planners.empty()) {
+    (void)stages.run("evaluate-either_or", eval_inputs, {"eval/either_or"},
+                     [&] { evaluate_sets(c, "eval/either_or", either_or, expert_planners); });
+  }
+  const auto rows = read_all_rollouts(c, "eval/footprint");
+  const ExpertLabels expert_labels = read_expert_labels(per_behavior_dirs(c, "labels"));
+  const auto examples = example_scenes(c, rows, expert_labels);
+  if (o.figures) {
+    (void)stages.run("figures", {{"evaluation", footprint}, {"labels", labels}}, {"figures"}, [&] {
+      fs::create_directories(c.dir / "figures");
+      draw_summary_figures(c, rows);
+      draw_examples(c, examples);
+    });
+  }
+  ReportInputs report;
+  report.options = &o;
+  report.sizes = c.sizes;
+  report.planners = planners;
+  report.expert_planners = expert_planners;
+  report.metrics = json::parse(std::ifstream(c.dir / "model" / "metrics.json"));
+  report.footprint = rows;
+  if (!expert_planners.empty()) {
+    report.either_or = read_all_rollouts(c, "eval/either_or");
+    for (const auto& r : rows) {
+      if (!uses_the_expert(r.planner)) report.either_or.push_back(r);
+    }
+  }
+  report.labels = expert_labels;
+  report.examples = examples;
+  report.seeds = {{"data", kDataSeed}, {"evaluation", kEvalSeed}, {"train", kTrainSeed}};
+  report.stages = stages.records();
+  ExperimentReport out;
+  out.stages = stages.records();
+  out.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  report.wall_s = out.wall_s;
+  const Document document = build_report(report);
+  out.report_md = path_in(c, "report.md");
+  out.report_html = path_in(c, "report.html");
+  lanechange::detail::write_file_atomically(out.report_md, document.markdown());
+  lanechange::detail::write_file_atomically(
+      out.report_html, document.html(o.out_dir, "lanechange: the paper's experiments"));
+  return out;
+}
+
+}  // namespace lanechange::experiments

@@ -1,0 +1,165 @@
+#include "experiments/report.hpp"
+
+#include <sys/utsname.h>
+
+#include <fstream>
+#include <sstream>
+#include <thread>
+
+namespace lanechange::experiments {
+
+namespace {
+
+std::string cpu_model() {
+  std::ifstream in("/proc/cpuinfo");
+  for (std::string line; std::getline(in, line);) {
+    if (line.rfind("model name", 0) == 0) return line.substr(line.find(':') + 2);
+  }
+  return "unknown CPU";
+}
+
+std::string machine() {
+  utsname name{};
+  std::string system = uname(&name) == 0 ? std::string(name.sysname) + " " + name.release : "";
+  system += ", ";
+  system += cpu_model();
+  system += ", ";
+  system += std::to_string(std::thread::hardware_concurrency());
+  system += " cores";
+  return system;
+}
+
+std::string seconds(double s) {
+  std::ostringstream out;
+  out.setf(std::ios::fixed);
+  out.precision(s < 10 ? 1 : 0);
+  out << s << " s";
+  return out.str();
+}
+
+std::string command_of(const ExperimentOptions& o, const ExperimentSizes& sizes) {
+  std::string command = "lanechange experiments --out ";
+  command += o.out_dir;
+  command += " --scale ";
+  command += to_string(o.scale);
+  if (o.eval_count > 0) command += " --eval-count " + std::to_string(sizes.eval_per_behavior);
+  if (!o.planners.empty()) {
+    command += " --planners ";
+    for (std::size_t i = 0; i < o.planners.size(); ++i) {
+      command += (i > 0 ? "," : "") + o.planners[i];
+    }
+  }
+  return command;
+}
+
+void provenance(Document& d, const ReportInputs& in) {
+  const ExperimentOptions& o = *in.options;
+  d.paragraph("Made by one command, from a run of this commit; no number below is typed by hand.");
+  d.code(command_of(o, in.sizes));
+  std::vector<std::string> items = {
+      "commit: `" + code_version() + "`",
+      "machine: " + machine(),
+      "scale: `" + std::string(to_string(o.scale)) +
+          "`: " + std::to_string(in.sizes.data_per_behavior) +
+          " expert scenarios per behavior for learning, " +
+          std::to_string(in.sizes.eval_per_behavior) +
+          " closed-loop scenarios per behavior for evaluation",
+      "lane rule of the default config: `" +
+          std::string(o.config.expert.lane_rule == LaneRule::Footprint ? "footprint"
+                                                                       : "either_or") +
+          "`; preset `" + o.config.preset + "`",
+  };
+  std::string seeds = "seeds: expert data ";
+  seeds += std::to_string(in.seeds.at("data"));
+  seeds += ", evaluation ";
+  seeds += std::to_string(in.seeds.at("evaluation"));
+  seeds +=
+      " (each +0, +1, +2 for constant speed, constant acceleration, IDM: learning and "
+      "evaluation never share a scene), training ";
+  seeds += std::to_string(in.seeds.at("train"));
+  items.push_back(seeds);
+  d.bullets(items);
+  Table stages{{"stage", "wall time", "this run"}, {}};
+  for (const auto& s : in.stages) {
+    stages.rows.push_back({s.name, seconds(s.wall_s), s.reused ? "reused" : "ran"});
+  }
+  stages.rows.push_back({"whole command (this invocation)", seconds(in.wall_s), ""});
+  d.table(stages);
+}
+
+void table_one(Document& d, const ReportInputs& in) {
+  d.heading(2, "Table I: scene classifiers");
+  const auto& data = in.metrics.at("data");
+  d.paragraph("Held-out accuracy on " + data.at("test_scenarios").dump() + " test scenes (" +
+              data.at("train_scenarios").dump() +
+              " for training, split by scenario). The paper's classifiers take the 13 scene "
+              "features; \"with behavior\" adds the other cars' behavior as an input.");
+  d.table(classifier_table(in.metrics));
+  d.paragraph("The SVM's confusion matrix, normalised by row (the paper's Fig. 3):");
+  d.table(svm_confusion_table(in.metrics));
+  d.figure("figures/confusion_svm.png", "Normalised confusion matrix of the SVM (13 features).");
+}
+
+void table_two(Document& d, int level, const std::string& rule,
+               const std::vector<sim::RolloutRow>& rows, const ReportInputs& in) {
+  d.heading(level, "Table II: planners in closed loop (" + rule + " lane rule)");
+  if (level == 2) {
+    d.paragraph(
+        "Every planner on the same scenes and loop. Success = ends well-posed without "
+        "collision; \"where miqp succeeds\" is the share of the scenes the re-planning expert "
+        "masters, which does not depend on how many scenes of the distribution are impossible. "
+        "Step times are per planner step (a re-plan, for the planners that re-plan every step): "
+        "p50 is the median of each rollout's median, p99 the 99th percentile of each rollout's "
+        "99th percentile, max the worst step of all. RMS jerk in m/s^3 (mean over rollouts), "
+        "max abs(a) in m/s^2.");
+  }
+  d.table(comparison_table(rows, in.planners));
+  const auto verdicts = where_others_beat_ours(rows, in.planners);
+  if (!verdicts.empty()) d.bullets(verdicts);
+}
+
+}  // namespace
+
+Document build_report(const ReportInputs& in) {
+  Document d;
+  d.heading(1, "The paper's experiments, reproduced");
+  provenance(d, in);
+  table_one(d, in);
+  table_two(d, 2, "footprint", in.footprint, in);
+  d.heading(2, "Table III: success per behavior of the other cars (footprint lane rule)");
+  d.table(behavior_table(in.footprint, in.planners));
+  d.figure("figures/success.png", "Success per planner and behavior (footprint lane rule).");
+  d.figure("figures/step_times.png",
+           "Compute time per step: the distribution of each rollout's median, log scale.");
+  const auto general = generalization_table(in.footprint, in.labels, in.planners);
+  d.heading(2, "Generalization: scenes the expert plans ill-posed");
+  d.paragraph("Of the evaluation scenes, " + std::to_string(general.ill_posed) + " of " +
+              std::to_string(in.labels.size()) +
+              " are planned ill-posed by the expert in open loop (the paper tests 1000). The "
+              "share each planner ends well-posed, in closed loop:");
+  d.table(general.table);
+  if (!in.expert_planners.empty()) {
+    d.heading(2, "The lane rule: either_or (the paper's literal reading)");
+    d.paragraph(
+        "The planners that use the expert run again with `expert.lane_rule = either_or`; the "
+        "baselines know no lane rule, so their rows repeat the footprint run. The action network "
+        "is the one trained on footprint data.");
+    table_two(d, 3, "either_or", in.either_or, in);
+    d.heading(3, "Table III (either_or lane rule)");
+    d.table(behavior_table(in.either_or, in.planners));
+  }
+  d.heading(2, "Example rollouts");
+  if (in.examples.empty()) d.paragraph("No scene of this run qualified as an example.");
+  for (const auto& scene : in.examples) {
+    d.heading(3, scene.name + ": " + scene.behavior + " scene " + std::to_string(scene.index));
+    d.paragraph(scene.why + ".");
+    for (const auto& planner : in.planners) {
+      if (planner == "keep-lane") continue;
+      d.figure("figures/" + scene.name + "_" + planner + ".png",
+               planner + " on " + scene.behavior + " scene " + std::to_string(scene.index));
+    }
+  }
+  return d;
+}
+
+}  // namespace lanechange::experiments

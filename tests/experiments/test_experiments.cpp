@@ -1,0 +1,91 @@
+// The experiments command at a tiny scale: every table and figure is made
+// from the run's own files, a rerun reuses the finished stages, and a
+// changed input runs its stage again.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <regex>
+
+#include "lanechange/baselines/baselines.hpp"
+#include "lanechange/error.hpp"
+#include "lanechange/experiments/experiments.hpp"
+#include "test_helpers.hpp"
+
+namespace lanechange {
+namespace {
+
+namespace fs = std::filesystem;
+
+experiments::ExperimentOptions tiny(const std::string& dir) {
+  experiments::ExperimentOptions o;
+  o.out_dir = dir;
+  o.scale = experiments::Scale::Tiny;
+  o.eval_count = 1;
+  o.jobs = 2;
+  o.config = testing::untimed_config();
+  return o;
+}
+
+bool reused(const experiments::ExperimentReport& r, const std::string& stage) {
+  for (const auto& s : r.stages) {
+    if (s.name == stage) return s.reused;
+  }
+  ADD_FAILURE() << "no stage " << stage;
+  return false;
+}
+
+TEST(Experiments, ATinyRunWritesEveryTableAndFigureAndARerunReusesItsStages) {
+  testing::TempDir dir;
+  const auto o = tiny(dir.file("run"));
+  const auto first = experiments::run_experiments(o);
+  const std::string md = testing::read_text(first.report_md);
+  for (const char* section :
+       {"Table I", "Table II: planners in closed loop (footprint", "Table III",
+        "Generalization", "either_or lane rule", "Example rollouts", "85.171%", "93.1%"}) {
+    EXPECT_NE(md.find(section), std::string::npos) << section;
+  }
+  // Every planner has a row in Table II, and every row has a number of scenes.
+  for (const auto& planner : baselines::planner_names()) {
+    EXPECT_NE(md.find("| " + planner + " | 3 |"), std::string::npos) << planner;
+  }
+  // Every picture the report names exists, and the HTML embeds it.
+  const std::regex picture(R"(\]\((figures/[^)]+\.png)\))");
+  int pictures = 0;
+  for (std::sregex_iterator it(md.begin(), md.end(), picture), end; it != end; ++it) {
+    EXPECT_TRUE(fs::exists(fs::path(o.out_dir) / (*it)[1].str())) << (*it)[1].str();
+    ++pictures;
+  }
+  EXPECT_GE(pictures, 4);  // confusion matrix, success bars, step times, an example
+  const std::string html = testing::read_text(first.report_html);
+  EXPECT_EQ(html.find("missing picture"), std::string::npos);
+  EXPECT_NE(html.find("data:image/png;base64,iVBORw0KGgo"), std::string::npos);
+  for (const auto& s : first.stages) EXPECT_FALSE(s.reused) << s.name;
+
+  const auto again = experiments::run_experiments(o);
+  for (const auto& s : again.stages) EXPECT_TRUE(s.reused) << s.name;
+  EXPECT_EQ(testing::read_text(again.report_md).substr(0, 200), md.substr(0, 200));
+
+  // Another evaluation size keeps the data and the models, and evaluates again.
+  auto more = o;
+  more.eval_count = 2;
+  more.planners = {"miqp", "keep-lane"};
+  const auto third = experiments::run_experiments(more);
+  EXPECT_TRUE(reused(third, "data"));
+  EXPECT_TRUE(reused(third, "models"));
+  EXPECT_FALSE(reused(third, "evaluate-footprint"));
+  EXPECT_NE(testing::read_text(third.report_md).find("| miqp | 6 |"), std::string::npos);
+}
+
+TEST(Experiments, BadOptionsAreRefusedBeforeAnythingIsWritten) {
+  testing::TempDir dir;
+  auto o = tiny(dir.file("run"));
+  o.planners = {"miqp", "nobody"};
+  EXPECT_THROW((void)experiments::run_experiments(o), InputError);
+  EXPECT_FALSE(fs::exists(o.out_dir));
+  EXPECT_THROW((void)experiments::scale_from_string("huge", "--scale"), InputError);
+  EXPECT_EQ(testing::run_cli("experiments --scale huge --out " + dir.file("x")).exit_code, 2);
+  EXPECT_FALSE(fs::exists(dir.file("x")));
+}
+
+}  // namespace
+}  // namespace lanechange
