@@ -22,6 +22,7 @@ constexpr std::array<Entry, 0> kBaselines{{}};
 
 std::vector<std::string> baseline_names() {
   std::vector<std::string> names;
+  names.reserve(kBaselines.size());
   for (const auto& entry : kBaselines) names.emplace_back(entry.name);
   return names;
 }

@@ -142,7 +142,13 @@ std::string Document::html(const std::string& base_dir, const std::string& title
     switch (b.kind) {
       case Kind::Heading: {
         const std::string tag = "h" + std::to_string(b.level);
-        out += "<" + tag + ">" + inline_html(b.text) + "</" + tag + ">\n";
+        out += "<";
+        out += tag;
+        out += ">";
+        out += inline_html(b.text);
+        out += "</";
+        out += tag;
+        out += ">\n";
         break;
       }
       case Kind::Paragraph: out += "<p>" + inline_html(b.text) + "</p>\n"; break;

@@ -86,6 +86,7 @@ std::string path_in(const Context& c, const std::string& relative) {
 
 std::vector<std::string> per_behavior_dirs(const Context& c, const std::string& parent) {
   std::vector<std::string> dirs;
+  dirs.reserve(kBehaviors.size());
   for (Behavior b : kBehaviors) dirs.push_back(path_in(c, parent + "/" + behavior_name(b)));
   return dirs;
 }

@@ -28,7 +28,7 @@ StageRunner::StageRunner(std::string out_dir, std::ostream* progress)
 std::string StageRunner::run(const std::string& name, const nlohmann::json& inputs,
                              const std::vector<std::string>& outputs,
                              const std::function<void()>& body) {
-  const std::string print = fingerprint(inputs.dump());
+  std::string print = fingerprint(inputs.dump());
   const fs::path stamp = fs::path(out_dir_) / "stages" / (name + ".json");
   const auto index = records_.size() + 1;
   if (fs::exists(stamp)) {
