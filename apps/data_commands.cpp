@@ -62,15 +62,8 @@ void run_generate(const GenerateArgs& args, const ConfigSource& config) {
     run.progress = &std::cerr;
     run.progress_on_terminal = ::isatty(STDERR_FILENO) != 0;
   }
-  try {
-    report_done(data::generate(options, run, *team), *team, options.out_dir);
-  } catch (const InputError&) {
-    throw;  // every rank sees the same bad input and stops by itself
-  } catch (const std::exception& e) {
-    if (team->size() <= 1) throw;
-    std::cerr << "error on rank " << team->rank() << ": " << e.what() << "\n";
-    abort_team(*team, 1);
-  }
+  run_on_team(*team,
+              [&] { report_done(data::generate(options, run, *team), *team, options.out_dir); });
 }
 
 }  // namespace

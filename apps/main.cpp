@@ -11,6 +11,7 @@
 #include <optional>
 
 #include "data_commands.hpp"
+#include "experiments_command.hpp"
 #include "lanechange/config.hpp"
 #include "lanechange/error.hpp"
 #include "lanechange/expert/crosscheck.hpp"
@@ -18,9 +19,8 @@
 #include "lanechange/plot.hpp"
 #include "lanechange/sampler.hpp"
 #include "lanechange/scenario.hpp"
-#include "experiments_command.hpp"
-#include "sim_commands.hpp"
 #include "learn_commands.hpp"
+#include "sim_commands.hpp"
 
 namespace lc = lanechange;
 

@@ -10,6 +10,7 @@
 #include "lanechange/sim/evaluate.hpp"
 #include "lanechange/sim/simulator.hpp"
 #include "lanechange/trajectory.hpp"
+#include "team.hpp"
 
 namespace lanechange::app {
 
@@ -80,14 +81,22 @@ void add_evaluate(CLI::App& app, ConfigSource config_source) {
     o.planners.clear();
     std::stringstream names(planners);
     for (std::string name; std::getline(names, name, ',');) o.planners.push_back(name);
+    const auto team = make_team();
     sim::EvaluateRun run;
     run.jobs = jobs;
-    run.progress = &std::cerr;
-    run.progress_on_terminal = ::isatty(STDERR_FILENO) != 0;
-    const sim::EvaluateReport r = sim::evaluate(o, run);
-    std::cerr << "evaluate: " << r.rollouts << " rollouts in " << r.wall_s << " s ("
-              << r.shards_skipped << " of " << r.shards_total << " shards were done already); see "
-              << o.out_dir << "/summary.csv\n";
+    run.team = team.get();
+    if (team->rank() == 0) {
+      run.progress = &std::cerr;
+      run.progress_on_terminal = ::isatty(STDERR_FILENO) != 0;
+    }
+    run_on_team(*team, [&] {
+      const sim::EvaluateReport r = sim::evaluate(o, run);
+      if (team->rank() != 0) return;
+      std::cerr << "evaluate: " << r.rollouts << " rollouts on rank 0 in " << r.wall_s << " s ("
+                << r.shards_skipped << " of " << r.shards_total
+                << " shards were done already or belong to other ranks); see " << o.out_dir
+                << "/summary.csv\n";
+    });
   });
 }
 

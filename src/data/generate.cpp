@@ -44,25 +44,11 @@ void validate_options(const GenerateOptions& o) {
 // every rank stops (or goes on) together. Codes: the DirectoryState, or -2
 // for bad input and -1 for any other error.
 DirectoryState agree_on_directory(const std::string& dir, const json& parameters, Team& team) {
-  int code = -1;
-  std::exception_ptr error;
-  if (team.rank() == 0) {
-    try {
-      const DirectoryState state = detail::prepare_directory(dir, parameters);
-      if (state == DirectoryState::Resumable) detail::remove_stale_temporaries(dir);
-      code = static_cast<int>(state);
-    } catch (const InputError&) {
-      error = std::current_exception();
-      code = -2;
-    } catch (...) {
-      error = std::current_exception();
-    }
-  }
-  code = team.broadcast(code);
-  if (error) std::rethrow_exception(error);
-  if (code == -2) throw InputError("--out", "refused by rank 0 (see its message)");
-  if (code < 0) throw std::runtime_error("rank 0 could not prepare " + dir);
-  return static_cast<DirectoryState>(code);
+  return static_cast<DirectoryState>(decide_on_rank_zero(team, "--out", [&] {
+    const DirectoryState state = detail::prepare_directory(dir, parameters);
+    if (state == DirectoryState::Resumable) detail::remove_stale_temporaries(dir);
+    return static_cast<int>(state);
+  }));
 }
 
 std::vector<ShardRange> unfinished_shards(const GenerateOptions& o, const Team& team,
@@ -134,6 +120,27 @@ long long scenarios_in(const std::vector<ShardRange>& shards) {
 }
 
 }  // namespace
+
+int decide_on_rank_zero(Team& team, const std::string& field, const std::function<int()>& decide) {
+  // Codes below zero: -2 for bad input, -1 for any other error.
+  int code = -1;
+  std::exception_ptr error;
+  if (team.rank() == 0) {
+    try {
+      code = decide();
+    } catch (const InputError&) {
+      error = std::current_exception();
+      code = -2;
+    } catch (...) {
+      error = std::current_exception();
+    }
+  }
+  code = team.broadcast(code);
+  if (error) std::rethrow_exception(error);
+  if (code == -2) throw InputError(field, "refused by rank 0 (see its message)");
+  if (code < 0) throw std::runtime_error("rank 0 failed (see its message)");
+  return code;
+}
 
 json dataset_parameters(const GenerateOptions& o) {
   const json config = o.config;

@@ -138,12 +138,15 @@ EvaluateReport evaluate(const EvaluateOptions& o, const EvaluateRun& run) {
   const json parameters = parameters_of(o);
   EvaluateReport report;
   report.shards_total = (o.count + o.shard_size - 1) / o.shard_size;
-  if (prepare(o, parameters)) {
+  data::Team alone;
+  data::Team& team = run.team != nullptr ? *run.team : alone;
+  if (data::decide_on_rank_zero(team, "--out", [&] { return prepare(o, parameters) ? 1 : 0; }) ==
+      1) {
     report.shards_skipped = report.shards_total;
     return report;
   }
   std::vector<long long> todo;
-  for (long long s = 0; s < report.shards_total; ++s) {
+  for (long long s = team.rank(); s < report.shards_total; s += team.size()) {
     if (fs::exists(fs::path(o.out_dir) / detail::shard_file(s))) {
       ++report.shards_skipped;
     } else {
@@ -192,11 +195,15 @@ EvaluateReport evaluate(const EvaluateOptions& o, const EvaluateRun& run) {
   for (auto& t : threads) t.join();
   progress.finish();
   if (error) std::rethrow_exception(error);
-  detail::write_results(o.out_dir, report.shards_total);
-  json manifest = {
-      {"format", kEvaluationFormat}, {"status", "complete"}, {"parameters", parameters}};
-  lanechange::detail::write_file_atomically((fs::path(o.out_dir) / kManifest).string(),
-                                            manifest.dump(2) + "\n");
+  // The tables are written once every rank has finished its shards.
+  team.barrier();
+  if (team.rank() == 0) {
+    detail::write_results(o.out_dir, report.shards_total);
+    json manifest = {
+        {"format", kEvaluationFormat}, {"status", "complete"}, {"parameters", parameters}};
+    lanechange::detail::write_file_atomically((fs::path(o.out_dir) / kManifest).string(),
+                                              manifest.dump(2) + "\n");
+  }
   report.rollouts = done;
   report.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return report;

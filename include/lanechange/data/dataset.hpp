@@ -4,6 +4,7 @@
 // be spread over threads and processes (MPI ranks), and resumed after a kill:
 // the content depends only on the parameters, never on who planned what.
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <memory>
 #include <nlohmann/json.hpp>
@@ -56,6 +57,12 @@ class Team {
   /// Rank 0's value, returned on every rank.
   virtual int broadcast(int value) { return value; }
 };
+
+/// Runs `decide` on rank 0 alone and returns its non-negative answer on
+/// every rank, so that all ranks stop (or go on) together. Rank 0 rethrows
+/// what `decide` threw; the other ranks throw InputError (naming `field`)
+/// for an InputError there and std::runtime_error for anything else.
+int decide_on_rank_zero(Team& team, const std::string& field, const std::function<int()>& decide);
 
 struct GenerateReport {
   long long shards_total = 0;

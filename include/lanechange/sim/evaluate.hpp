@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "lanechange/config.hpp"
+#include "lanechange/data/dataset.hpp"
 #include "lanechange/planner/planner.hpp"
 #include "lanechange/scenario.hpp"
 
@@ -39,6 +40,8 @@ struct EvaluateRun {
   int jobs = 0;  ///< worker threads; 0: one per core
   std::ostream* progress = nullptr;
   bool progress_on_terminal = false;
+  /// The MPI ranks sharing the run (shard s on rank s mod size); none: alone.
+  data::Team* team = nullptr;
 };
 
 struct EvaluateReport {
