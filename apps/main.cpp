@@ -318,16 +318,31 @@ void add_label_study(CLI::App& app, const GlobalOptions& global) {
 }
 
 void add_plot(CLI::App& app, const GlobalOptions& global) {
-  auto* cmd = app.add_subcommand("plot", "Draw a trajectory file as a PNG (needs gnuplot)");
+  auto* cmd = app.add_subcommand(
+      "plot", "Draw a trajectory file as a PNG (needs gnuplot), or --animate it as an SVG");
   static std::string trajectory_path;
   static std::string out_path;
   static int snapshots = 5;
+  static bool animate = false;
+  static double speedup = 1.0;
   cmd->add_option("--trajectory", trajectory_path, "Trajectory JSON file (plan or rollout)")
       ->required();
-  cmd->add_option("--out", out_path, "PNG file to write")->required();
+  cmd->add_option("--out", out_path, "PNG file to write (SVG with --animate)")->required();
+  cmd->add_flag("--animate", animate,
+                "Write an animated SVG (plays in a web browser; no gnuplot needed)");
+  cmd->add_option("--speedup", speedup, "Playback speed of --animate against real time")
+      ->check(CLI::PositiveNumber);
   cmd->add_option("--snapshots", snapshots, "How many instants to draw the cars at")
       ->check(CLI::Range(1, 50));
   cmd->callback([&global] {
+    if (animate) {
+      lc::AnimationOptions options;
+      options.vehicle = global.config().vehicle;
+      options.speedup = speedup;
+      lc::animate_trajectory(lc::load_trajectory(trajectory_path), out_path, options);
+      std::cerr << "wrote " << out_path << "\n";
+      return;
+    }
     lc::PlotOptions options;
     options.vehicle = global.config().vehicle;  // the trajectory file does not store it
     options.snapshots = snapshots;

@@ -45,3 +45,30 @@ void render_png(const std::function<std::string(const std::string&)>& script_for
 [[nodiscard]] std::string gnuplot_quoted(std::string_view text);
 
 }  // namespace lanechange
+
+namespace lanechange {
+
+struct AnimationOptions {
+  VehicleSize vehicle;        ///< the trajectory file does not store the car size
+  double view_length = 90.0;  ///< m of road in view; the view follows the ego
+  double speedup = 1.0;       ///< playback speed against real time
+  int width_px = 1200;
+};
+
+/// An animated SVG of a plan or rollout: the road, the four cars moving as
+/// recorded (the ego turning with its heading), the ego's path, take-over
+/// and fallback steps marked, and a clock bar. Plays in any web browser
+/// (SMIL animation); needs no program to make. InputError for a malformed
+/// trajectory or options.
+[[nodiscard]] std::string trajectory_animation_svg(const Trajectory& trajectory,
+                                                   const AnimationOptions& options = {});
+
+/// Text made safe inside XML and HTML elements and attributes (control
+/// characters become spaces).
+[[nodiscard]] std::string xml_escaped(std::string_view text);
+
+/// Writes trajectory_animation_svg atomically.
+void animate_trajectory(const Trajectory& trajectory, const std::string& svg_path,
+                        const AnimationOptions& options = {});
+
+}  // namespace lanechange

@@ -4,24 +4,13 @@
 #include <fstream>
 #include <sstream>
 
+#include "lanechange/plot.hpp"
+
 namespace lanechange::experiments {
 
 namespace {
 
-std::string escape_html(const std::string& text) {
-  std::string out;
-  out.reserve(text.size());
-  for (char c : text) {
-    switch (c) {
-      case '&': out += "&amp;"; break;
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '"': out += "&quot;"; break;
-      default: out += c;
-    }
-  }
-  return out;
-}
+std::string escape_html(const std::string& text) { return xml_escaped(text); }
 
 // Markdown's inline code and bold survive into the HTML as <code> and <b>:
 // the report's prose uses nothing else.
@@ -141,7 +130,8 @@ std::string Document::html(const std::string& base_dir, const std::string& title
   for (const Block& b : blocks_) {
     switch (b.kind) {
       case Kind::Heading: {
-        const std::string tag = "h" + std::to_string(b.level);
+        std::string tag = "h";
+        tag += std::to_string(b.level);
         out += "<";
         out += tag;
         out += ">";

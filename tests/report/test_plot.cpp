@@ -12,6 +12,7 @@
 #include <sstream>
 #include <string>
 #include <tuple>
+#include <vector>
 
 #include "lanechange/error.hpp"
 #include "lanechange/plot.hpp"
@@ -275,6 +276,61 @@ TEST(PlotPng, FailingGnuplotKeepsTheOldFileAndReportsItsError) {
   }
   EXPECT_EQ(read_bytes(png), "previous");
   EXPECT_EQ(dir.entries(), 2);  // the fake gnuplot and the old file, no temporary
+}
+
+// The values of the first animation of `attribute` ("translate" or "rotate").
+std::vector<std::string> animated_values(const std::string& svg, const std::string& type,
+                                         std::size_t which = 0) {
+  std::size_t at = 0;
+  for (std::size_t i = 0; i <= which; ++i) {
+    at = svg.find("type=\"" + type + "\" values=\"", at + 1);
+    if (at == std::string::npos) return {};
+  }
+  const auto begin = svg.find("values=\"", at) + 8;
+  const std::string list = svg.substr(begin, svg.find('"', begin) - begin);
+  std::vector<std::string> out;
+  std::stringstream in(list);
+  for (std::string v; std::getline(in, v, ';');) out.push_back(v);
+  return out;
+}
+
+TEST(Animation, EveryCarMovesThroughEveryNodeInRealTime) {
+  const Trajectory tr = lane_change(51);
+  const std::string svg = trajectory_animation_svg(tr);
+  EXPECT_EQ(svg.rfind("<svg", 0), 0U);
+  EXPECT_EQ(count(svg, "<g"), count(svg, "</g>"));
+  // Three cars, the ego, and the caption that rides with the camera.
+  EXPECT_EQ(count(svg, "type=\"translate\""), 5);
+  for (std::size_t car = 0; car < 4; ++car) {
+    EXPECT_EQ(animated_values(svg, "translate", car).size(), 51U) << car;
+  }
+  const auto ego = animated_values(svg, "translate", 3);
+  EXPECT_EQ(ego.front(), "0,0");
+  EXPECT_EQ(ego.back(), "40,3.5");  // 8 m/s for 5 s, into the target lane
+  const auto heading = animated_values(svg, "rotate");
+  ASSERT_EQ(heading.size(), 51U);
+  EXPECT_EQ(heading.front(), "0");
+  EXPECT_GT(std::stod(heading[25]), 1.0);  // degrees, turning left mid-way
+  EXPECT_NE(svg.find("dur=\"5s\""), std::string::npos);
+  AnimationOptions twice;
+  twice.speedup = 2.0;
+  EXPECT_NE(trajectory_animation_svg(tr, twice).find("dur=\"2.5s\""), std::string::npos);
+}
+
+TEST(Animation, MarksEventsEscapesTextAndRefusesBadInput) {
+  Trajectory tr = lane_change(11);
+  tr.reason = "a <reason> & more";
+  tr.details["events"]["took_over"] = nlohmann::json::array({{{"step", 3}}});
+  const std::string svg = trajectory_animation_svg(tr);
+  EXPECT_NE(svg.find("a &lt;reason&gt; &amp; more"), std::string::npos);
+  EXPECT_EQ(count(svg, "<title>took_over</title>"), 1);
+  EXPECT_THROW((void)trajectory_animation_svg(lane_change(1)), InputError);
+  Trajectory short_cars = lane_change(11);
+  short_cars.others.cars[0].x.pop_back();
+  EXPECT_THROW((void)trajectory_animation_svg(short_cars), InputError);
+  AnimationOptions bad;
+  bad.speedup = 0.0;
+  EXPECT_THROW((void)trajectory_animation_svg(tr, bad), InputError);
 }
 
 }  // namespace
