@@ -36,6 +36,16 @@ std::string fixed(double value, int digits) {
   return out.str();
 }
 
+// Step times span five decades (microseconds for a network, a second for a
+// stalled solve): three significant digits for each.
+std::string significant(double value) {
+  if (!std::isfinite(value)) return "–";
+  std::ostringstream out;
+  out.precision(3);
+  out << value;
+  return out.str();
+}
+
 std::vector<const sim::RolloutRow*> of_planner(const std::vector<sim::RolloutRow>& rows,
                                                const std::string& planner,
                                                const std::string& behavior = "") {
@@ -194,9 +204,9 @@ Table comparison_table(const std::vector<sim::RolloutRow>& rows,
              percent(count(mine, [](const auto* r) { return r->at_fault; }), n) + ")",
          percent(count(mine, [](const auto* r) { return r->outcome == "aborted"; }), n),
          fixed(mean(column(mine, &sim::RolloutRow::takeovers)), 2),
-         fixed(quantile(column(mine, &sim::RolloutRow::median_step_ms), 0.5), 3),
-         fixed(quantile(column(mine, &sim::RolloutRow::p99_step_ms), 0.99), 3),
-         fixed(quantile(column(mine, &sim::RolloutRow::max_step_ms), 1.0), 3),
+         significant(quantile(column(mine, &sim::RolloutRow::median_step_ms), 0.5)),
+         significant(quantile(column(mine, &sim::RolloutRow::p99_step_ms), 0.99)),
+         significant(quantile(column(mine, &sim::RolloutRow::max_step_ms), 1.0)),
          fixed(mean(column(mine, &sim::RolloutRow::rms_jerk)), 2),
          fixed(quantile(column(mine, &sim::RolloutRow::max_abs_accel), 0.95), 2),
          paper == kPaperComparison.end() ? "–" : paper->second});
