@@ -53,10 +53,53 @@ const CarState* car_ahead(const Observation& o, bool target_lane) {
   return best;
 }
 
+namespace {
+
+// How far (m) the ego is from breaking the expert's safe distances (Eq. 1)
+// to the cars of a lane: negative when it already does. The car behind is
+// measured by the follower's rule, the car ahead by the target's (or, in the
+// ego lane, the leader's).
+double lane_margin(const Observation& o, bool target_lane) {
+  const SafetyMargins& d = o.scene->safe_distance;
+  const EgoState& ego = o.ego;
+  if (!target_lane) {
+    const CarState& leader = o.car(Car::Leader);
+    return leader.x - d.leader.standstill - (ego.x + d.leader.time_headway * ego.v);
+  }
+  double margin = std::numeric_limits<double>::infinity();
+  for (const Car car : {Car::Follower, Car::Target}) {
+    const CarState& c = o.car(car);
+    margin = std::min(
+        margin, c.x <= ego.x ? ego.x - (c.x + d.follower.standstill + d.follower.time_headway * c.v)
+                             : c.x - d.target.standstill - (ego.x + d.target.time_headway * ego.v));
+  }
+  return margin;
+}
+
+}  // namespace
+
+bool fallback_in_target_lane(const Observation& o) {
+  if (o.ego.y <= o.scene->lane_width / 2.0) return false;
+  // Over the line, turning back is the riskier move, unless the target lane
+  // is closing in around the ego while its own lane is clear.
+  const double target = lane_margin(o, true);
+  return target >= 0.0 || target >= lane_margin(o, false);
+}
+
 EgoControl fallback_control(const LaneKeeper& keeper, const Observation& o) {
   const double w = o.scene->lane_width;
-  const bool target_lane = o.ego.y > w / 2.0;
-  return keeper.control(o.ego, target_lane ? w : 0.0, car_ahead(o, target_lane));
+  const bool target_lane = fallback_in_target_lane(o);
+  const double center = target_lane ? w : 0.0;
+  EgoControl u = keeper.control(o.ego, center, car_ahead(o, target_lane));
+  // Until its body has left the other lane, the ego also follows the car
+  // ahead there: turning away from a car does not stop it closing in.
+  const double half_body = o.scene->vehicle.width / 2.0;
+  const bool in_other_lane =
+      target_lane ? o.ego.y - half_body < w / 2.0 : o.ego.y + half_body > w / 2.0;
+  if (in_other_lane) {
+    u.a = std::min(u.a, keeper.control(o.ego, center, car_ahead(o, !target_lane)).a);
+  }
+  return u;
 }
 
 bool clip_to_limits(EgoControl& control, const EgoState& ego, const Limits& limits, double dt) {

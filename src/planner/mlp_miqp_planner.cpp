@@ -153,6 +153,33 @@ EgoControl MlpMiqpSession::network_control(const Observation& o) const {
   return planner_.network(o);
 }
 
+namespace {
+
+// The expert's own rule (Eq. 1): once the ego's body touches the target
+// lane it keeps the safe distance ahead of the follower and behind the
+// target. A network that breaks it is about to cut in where the expert never
+// would; taking over then, before the cut-in, leaves the expert a feasible
+// plan that later would not exist.
+std::string too_close_in_target_lane(const Observation& o, const Scenario& scene) {
+  const double w = scene.lane_width;
+  if (o.ego.y + scene.vehicle.width / 2.0 <= w / 2.0) return "";
+  const SafetyMargins& d = scene.safe_distance;
+  const CarState& follower = o.car(Car::Follower);
+  const CarState& target = o.car(Car::Target);
+  // The gap is the one between the follower and the target: behind the
+  // follower (when it is ahead) is not where the expert changes lanes.
+  if (o.ego.x < follower.x + d.follower.standstill + d.follower.time_headway * follower.v) {
+    return "the network would enter the target lane short of the follower's safe distance";
+  }
+  if (target.x >= o.ego.x &&
+      o.ego.x + d.target.time_headway * o.ego.v > target.x - d.target.standstill) {
+    return "the network would close in on the target within its safe distance";
+  }
+  return "";
+}
+
+}  // namespace
+
 // The policy rolled forward against the cars as their behavior predicts
 // them from now (IDM reacting to the rolled-out ego), through the planner's
 // model of the ego, its controls saturated at the limits. Empty when the
@@ -204,6 +231,9 @@ std::string MlpMiqpSession::check_ahead(const Observation& now, EgoControl first
                     "y %.2f m)",
                     k + 1, o.ego.v, o.ego.y);
       return what;
+    }
+    if (const std::string close = too_close_in_target_lane(o, scene); !close.empty()) {
+      return close + " " + std::to_string(k + 1) + " steps ahead";
     }
     u = network_control(o);
   }

@@ -79,9 +79,14 @@ class LaneKeeper {
 /// target in the target lane (the follower once the ego is behind it).
 [[nodiscard]] const CarState* car_ahead(const Observation& observation, bool target_lane);
 
-/// The fallback's control: the lane keeper in the ego lane, or in the target
-/// lane once the ego's centre is over the line (turning back from there is
-/// the riskier move).
+/// Whether the fallback keeps to the target lane: once the ego's centre is
+/// over the line (turning back from there is the riskier move), unless the
+/// target lane breaks the expert's safe distances around the ego more than
+/// the ego lane does (a cut-in gone wrong: back out of it).
+[[nodiscard]] bool fallback_in_target_lane(const Observation& observation);
+
+/// The fallback's control: the lane keeper in the lane fallback_in_target_lane
+/// chooses.
 [[nodiscard]] EgoControl fallback_control(const LaneKeeper& keeper, const Observation& observation);
 
 /// Clips a control to the ego's limits, also keeping the speed within its
