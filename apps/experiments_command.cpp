@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "lanechange/experiments/experiments.hpp"
+#include "team.hpp"
 
 namespace lanechange::app {
 
@@ -36,11 +37,16 @@ void add_experiments(CLI::App& app, ConfigSource config_source) {
       if (!name.empty()) o.planners.push_back(name);
     }
     o.figures = !no_figures;
+    const auto team = make_team();
+    o.team = team.get();
     o.progress = &std::cerr;
     o.progress_on_terminal = ::isatty(STDERR_FILENO) != 0;
-    const auto report = experiments::run_experiments(o);
-    std::cerr << "experiments done in " << report.wall_s << " s\n";
-    std::cout << "report: " << report.report_md << "\n        " << report.report_html << "\n";
+    run_on_team(*team, [&] {
+      const auto report = experiments::run_experiments(o);
+      if (team->rank() != 0) return;
+      std::cerr << "experiments done in " << report.wall_s << " s\n";
+      std::cout << "report: " << report.report_md << "\n        " << report.report_html << "\n";
+    });
   });
 }
 

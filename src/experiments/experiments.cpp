@@ -74,6 +74,7 @@ void validate(const ExperimentOptions& o, const std::vector<std::string>& planne
 
 struct Context {
   const ExperimentOptions& options;
+  data::Team& team;
   ExperimentSizes sizes;
   std::vector<std::string> planners;
   fs::path dir;
@@ -103,10 +104,11 @@ void generate_sets(const Context& c, const std::string& parent, std::uint64_t se
     g.config = c.options.config;
     data::RunOptions run;
     run.jobs = c.options.jobs;
-    run.progress = c.options.progress;
-    run.progress_on_terminal = c.options.progress_on_terminal;
-    data::Team alone;
-    (void)data::generate(g, run, alone);
+    if (c.team.rank() == 0) {
+      run.progress = c.options.progress;
+      run.progress_on_terminal = c.options.progress_on_terminal;
+    }
+    (void)data::generate(g, run, c.team);
   }
 }
 
@@ -125,8 +127,11 @@ void evaluate_sets(const Context& c, const std::string& parent, const Config& co
     e.make_planner = baselines::make_planner;
     sim::EvaluateRun run;
     run.jobs = c.options.jobs;
-    run.progress = c.options.progress;
-    run.progress_on_terminal = c.options.progress_on_terminal;
+    run.team = &c.team;
+    if (c.team.rank() == 0) {
+      run.progress = c.options.progress;
+      run.progress_on_terminal = c.options.progress_on_terminal;
+    }
     (void)sim::evaluate(e, run);
   }
 }
@@ -198,6 +203,20 @@ void draw_examples(const Context& c, const std::vector<ExampleScene>& scenes) {
   }
 }
 
+void train(const Context& c) {
+  learn::TrainOptions t;
+  t.data_dirs = per_behavior_dirs(c, "data");
+  t.out_dir = path_in(c, "model");
+  t.seed = kTrainSeed;
+  t.test_share = kTestShare;
+  t.jobs = c.options.jobs;
+  t.search.quick = c.sizes.quick_search;
+  t.network.max_epochs = c.sizes.max_epochs;
+  t.plots = c.options.figures;
+  t.progress = c.options.progress;
+  (void)learn::train_models(t);
+}
+
 void draw_summary_figures(const Context& c, const std::vector<sim::RolloutRow>& rows) {
   plot_success_bars(rows, c.planners, path_in(c, "figures/success.png"));
   plot_step_times(rows, c.planners, path_in(c, "figures/step_times.png"));
@@ -242,17 +261,23 @@ ExperimentReport run_experiments(const ExperimentOptions& o) {
   const auto planners = o.planners.empty() ? default_planners() : o.planners;
   validate(o, planners);
   const auto start = std::chrono::steady_clock::now();
-  Context c{o, sizes_of(o.scale), planners, fs::path(o.out_dir), {}};
+  data::Team alone;
+  data::Team& team = o.team != nullptr ? *o.team : alone;
+  Context c{o, team, sizes_of(o.scale), planners, fs::path(o.out_dir), {}};
   if (o.eval_count > 0) c.sizes.eval_per_behavior = o.eval_count;
-  fs::create_directories(c.dir);
+  (void)data::decide_on_rank_zero(team, "--out", [&] {
+    fs::create_directories(c.dir);
+    return 0;
+  });
   json config;
   to_json(config, o.config);
   c.base_inputs = {{"code_version", code_version()}, {"config", config}};
-  StageRunner stages(o.out_dir, o.progress);
+  StageRunner stages(o.out_dir, o.progress, team);
 
   const std::string data = stages.run(
       "data", {{"base", c.base_inputs}, {"count", c.sizes.data_per_behavior}, {"seed", kDataSeed}},
-      {"data"}, [&] { generate_sets(c, "data", kDataSeed, c.sizes.data_per_behavior); });
+      {"data"}, StageRunner::Ranks::All,
+      [&] { generate_sets(c, "data", kDataSeed, c.sizes.data_per_behavior); });
   const std::string models = stages.run("models",
                                         {{"data", data},
                                          {"seed", kTrainSeed},
@@ -260,30 +285,19 @@ ExperimentReport run_experiments(const ExperimentOptions& o) {
                                          {"quick", c.sizes.quick_search},
                                          {"max_epochs", c.sizes.max_epochs},
                                          {"figures", o.figures}},
-                                        {"model"}, [&] {
-                                          learn::TrainOptions t;
-                                          t.data_dirs = per_behavior_dirs(c, "data");
-                                          t.out_dir = path_in(c, "model");
-                                          t.seed = kTrainSeed;
-                                          t.test_share = kTestShare;
-                                          t.jobs = o.jobs;
-                                          t.search.quick = c.sizes.quick_search;
-                                          t.network.max_epochs = c.sizes.max_epochs;
-                                          t.plots = o.figures;
-                                          t.progress = o.progress;
-                                          (void)learn::train_models(t);
-                                        });
+                                        {"model"}, StageRunner::Ranks::First, [&] { train(c); });
   const std::string labels = stages.run(
       "expert-labels",
       {{"base", c.base_inputs}, {"count", c.sizes.eval_per_behavior}, {"seed", kEvalSeed}},
-      {"labels"}, [&] { generate_sets(c, "labels", kEvalSeed, c.sizes.eval_per_behavior); });
+      {"labels"}, StageRunner::Ranks::All,
+      [&] { generate_sets(c, "labels", kEvalSeed, c.sizes.eval_per_behavior); });
   json eval_inputs = {{"base", c.base_inputs},
                       {"models", models},
                       {"count", c.sizes.eval_per_behavior},
                       {"seed", kEvalSeed},
                       {"planners", planners}};
   const std::string footprint =
-      stages.run("evaluate-footprint", eval_inputs, {"eval/footprint"},
+      stages.run("evaluate-footprint", eval_inputs, {"eval/footprint"}, StageRunner::Ranks::All,
                  [&] { evaluate_sets(c, "eval/footprint", o.config, planners); });
   // The baselines know no lane rule: their rows are those of the default run.
   std::vector<std::string> expert_planners;
@@ -295,14 +309,24 @@ ExperimentReport run_experiments(const ExperimentOptions& o) {
   eval_inputs["lane_rule"] = "either_or";
   eval_inputs["planners"] = expert_planners;
   if (!expert_planners.empty()) {
-    (void)stages.run("evaluate-either_or", eval_inputs, {"eval/either_or"},
+    (void)stages.run("evaluate-either_or", eval_inputs, {"eval/either_or"}, StageRunner::Ranks::All,
                      [&] { evaluate_sets(c, "eval/either_or", either_or, expert_planners); });
+  }
+  ExperimentReport out;
+  const json figure_inputs = {{"evaluation", footprint}, {"labels", labels}};
+  if (team.rank() != 0) {
+    // The figures and the report are rank 0's; the others wait for it.
+    if (o.figures) {
+      (void)stages.run("figures", figure_inputs, {"figures"}, StageRunner::Ranks::First, [] {});
+    }
+    out.stages = stages.records();
+    return out;
   }
   const auto rows = read_all_rollouts(c, "eval/footprint");
   const ExpertLabels expert_labels = read_expert_labels(per_behavior_dirs(c, "labels"));
   const auto examples = example_scenes(c, rows, expert_labels);
   if (o.figures) {
-    (void)stages.run("figures", {{"evaluation", footprint}, {"labels", labels}}, {"figures"}, [&] {
+    (void)stages.run("figures", figure_inputs, {"figures"}, StageRunner::Ranks::First, [&] {
       fs::create_directories(c.dir / "figures");
       draw_summary_figures(c, rows);
       draw_examples(c, examples);
@@ -325,7 +349,6 @@ ExperimentReport run_experiments(const ExperimentOptions& o) {
   report.examples = examples;
   report.seeds = {{"data", kDataSeed}, {"evaluation", kEvalSeed}, {"train", kTrainSeed}};
   report.stages = stages.records();
-  ExperimentReport out;
   out.stages = stages.records();
   out.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   report.wall_s = out.wall_s;

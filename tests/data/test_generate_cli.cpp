@@ -207,18 +207,13 @@ TEST(GenerateCli, MpiRanksWriteWhatThreadsWrite) {
 #ifndef LANECHANGE_HAVE_MPI
   GTEST_SKIP() << "built without MPI";
 #endif
-  if (std::system("command -v mpirun > /dev/null 2>&1") != 0) GTEST_SKIP() << "no mpirun";
+  if (!testing::mpirun_available()) GTEST_SKIP() << "no mpirun";
   TempDir dir;
   const std::string threads = dir.file("threads");
   const std::string ranks = dir.file("ranks");
   ASSERT_EQ(run_cli(small_run(threads, 10, 6, "--jobs 2")).exit_code, 0);
-  // ASan's leak check would report MPI's own allocations at exit.
-  const std::string mpirun =
-      "OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 ASAN_OPTIONS=detect_leaks=0 "
-      "mpirun -np 2 --oversubscribe " +
-      std::string(LANECHANGE_CLI) + " " + small_run(ranks, 10, 6, "--jobs 1") + " 2>&1";
-  const int status = std::system(mpirun.c_str());
-  ASSERT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << mpirun;
+  const auto on_ranks = testing::run_cli_on_ranks(2, small_run(ranks, 10, 6, "--jobs 1"));
+  ASSERT_EQ(on_ranks.exit_code, 0) << on_ranks.output;
   const auto manifest = testing::read_manifest(ranks);
   EXPECT_EQ(manifest["run"]["ranks"], 2);
   EXPECT_EQ(testing::deterministic_files(threads), testing::deterministic_files(ranks));

@@ -40,8 +40,8 @@ TEST(Experiments, ATinyRunWritesEveryTableAndFigureAndARerunReusesItsStages) {
   const auto first = experiments::run_experiments(o);
   const std::string md = testing::read_text(first.report_md);
   for (const char* section :
-       {"Table I", "Table II: planners in closed loop (footprint", "Table III",
-        "Generalization", "either_or lane rule", "Example rollouts", "85.171%", "93.1%"}) {
+       {"Table I", "Table II: planners in closed loop (footprint", "Table III", "Generalization",
+        "either_or lane rule", "Example rollouts", "85.171%", "93.1%"}) {
     EXPECT_NE(md.find(section), std::string::npos) << section;
   }
   // Every planner has a row in Table II, and every row has a number of scenes.
@@ -74,6 +74,26 @@ TEST(Experiments, ATinyRunWritesEveryTableAndFigureAndARerunReusesItsStages) {
   EXPECT_TRUE(reused(third, "models"));
   EXPECT_FALSE(reused(third, "evaluate-footprint"));
   EXPECT_NE(testing::read_text(third.report_md).find("| miqp | 6 |"), std::string::npos);
+}
+
+TEST(Experiments, MpiRanksShareTheDataAndEvaluationStages) {
+#ifndef LANECHANGE_HAVE_MPI
+  GTEST_SKIP() << "built without MPI";
+#endif
+  if (!testing::mpirun_available()) GTEST_SKIP() << "no mpirun";
+  testing::TempDir dir;
+  const auto run = testing::run_cli_on_ranks(
+      2, "--config " + testing::untimed_config_file(dir) +
+             " experiments --scale tiny --eval-count 1 --planners miqp,keep-lane --no-figures "
+             "--jobs 1 --out " +
+             dir.file("run"));
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  const std::string md = testing::read_text(dir.file("run/report.md"));
+  EXPECT_NE(md.find("| miqp | 3 |"), std::string::npos);
+  // The data set's manifest says two ranks made it.
+  const auto manifest =
+      nlohmann::json::parse(testing::read_text(dir.file("run/data/idm/manifest.json")));
+  EXPECT_EQ(manifest["run"]["ranks"], 2);
 }
 
 TEST(Experiments, BadOptionsAreRefusedBeforeAnythingIsWritten) {

@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -58,9 +59,9 @@ struct CommandResult {
   std::string output;  ///< stdout and stderr together
 };
 
-/// Runs the lanechange CLI with `args` (already shell-quoted).
-inline CommandResult run_cli(const std::string& args) {
-  const std::string command = std::string(LANECHANGE_CLI) + " " + args + " 2>&1";
+/// Runs a shell command line, with its standard error.
+inline CommandResult run_cli_command(const std::string& command_line) {
+  const std::string command = command_line + " 2>&1";
   CommandResult result;
   FILE* pipe = ::popen(command.c_str(), "r");
   if (pipe == nullptr) return result;
@@ -71,6 +72,23 @@ inline CommandResult run_cli(const std::string& args) {
   return result;
 }
 
+/// Runs the lanechange CLI with `args` (already shell-quoted).
+inline CommandResult run_cli(const std::string& args) {
+  return run_cli_command(std::string(LANECHANGE_CLI) + " " + args);
+}
+
+/// Runs the lanechange CLI on `ranks` MPI ranks (mpirun must be on PATH).
+/// ASan's leak check would report MPI's own allocations at exit, and as root
+/// mpirun wants to be told that is meant.
+inline CommandResult run_cli_on_ranks(int ranks, const std::string& args) {
+  return run_cli_command(
+      "OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 ASAN_OPTIONS=detect_leaks=0 "
+      "mpirun -np " +
+      std::to_string(ranks) + " --oversubscribe " + std::string(LANECHANGE_CLI) + " " + args);
+}
+
+inline bool mpirun_available() { return std::system("command -v mpirun > /dev/null 2>&1") == 0; }
+
 /// The default config with a closed-loop step budget that never binds: under
 /// the sanitizers a re-plan can take longer than the 100 ms control period,
 /// and an overrun hands the step to the fallback, which would make outcomes
@@ -79,6 +97,13 @@ inline Config untimed_config() {
   Config c;
   c.closed_loop.step_budget_ms = 1e9;
   return c;
+}
+
+/// untimed_config() as a file for the CLI, in `dir`; returns its path.
+inline std::string untimed_config_file(const TempDir& dir) {
+  const std::string path = dir.file("untimed.json");
+  write_text(path, R"({"closed_loop": {"step_budget_ms": 1e9}})");
+  return path;
 }
 
 /// Every car far away: a wide-open gap in the target lane.

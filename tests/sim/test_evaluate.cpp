@@ -120,20 +120,15 @@ TEST(Evaluate, MpiRanksWriteWhatThreadsWrite) {
 #ifndef LANECHANGE_HAVE_MPI
   GTEST_SKIP() << "built without MPI";
 #endif
-  if (std::system("command -v mpirun > /dev/null 2>&1") != 0) GTEST_SKIP() << "no mpirun";
+  if (!testing::mpirun_available()) GTEST_SKIP() << "no mpirun";
   testing::TempDir dir;
   // A step budget that never binds: an overrun depends on the machine's load.
-  testing::write_text(dir.file("untimed.json"), R"({"closed_loop": {"step_budget_ms": 1e9}})");
-  const std::string run =
-      " --config " + dir.file("untimed.json") + " evaluate --count 6 --seed 3 --shard-size 2 --planner keep-lane,miqp --duration 3 --out ";
+  const std::string run = "--config " + testing::untimed_config_file(dir) +
+                          " evaluate --count 6 --seed 3 --shard-size 2 --planner keep-lane,miqp "
+                          "--duration 3 --out ";
   ASSERT_EQ(testing::run_cli(run + dir.file("threads") + " --jobs 2").exit_code, 0);
-  // ASan's leak check would report MPI's own allocations at exit.
-  const std::string mpirun =
-      "OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 ASAN_OPTIONS=detect_leaks=0 "
-      "mpirun -np 2 --oversubscribe " +
-      std::string(LANECHANGE_CLI) + run + dir.file("ranks") + " --jobs 1 > /dev/null 2>&1";
-  const int status = std::system(mpirun.c_str());
-  ASSERT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << mpirun;
+  const auto ranks_run = testing::run_cli_on_ranks(2, run + dir.file("ranks") + " --jobs 1");
+  ASSERT_EQ(ranks_run.exit_code, 0) << ranks_run.output;
   const auto threads = lines_of(dir.file("threads/rollouts.csv"));
   const auto ranks = lines_of(dir.file("ranks/rollouts.csv"));
   ASSERT_EQ(ranks.size(), threads.size());

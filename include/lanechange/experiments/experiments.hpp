@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "lanechange/config.hpp"
+#include "lanechange/data/dataset.hpp"
 
 namespace lanechange::experiments {
 
@@ -42,6 +43,10 @@ struct ExperimentOptions {
   bool figures = true;  ///< PNGs (needs gnuplot)
   std::ostream* progress = nullptr;
   bool progress_on_terminal = false;
+  /// The MPI ranks sharing the run: the data and evaluation stages split
+  /// their shards over them; rank 0 alone trains, draws and writes the
+  /// report. None: this process alone.
+  data::Team* team = nullptr;
 };
 
 struct StageRecord {
@@ -58,7 +63,8 @@ struct ExperimentReport {
 };
 
 /// Runs (or resumes) every stage and writes DIR/report.md and
-/// DIR/report.html. InputError for bad options, before anything is written.
+/// DIR/report.html (on rank 0; the other ranks' report names no files).
+/// InputError for bad options, before anything is written.
 ExperimentReport run_experiments(const ExperimentOptions& options);
 
 /// The commit the program was built from ("-dirty" if the tree had changes;
