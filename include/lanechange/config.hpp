@@ -195,16 +195,19 @@ struct MpcSettings {};
 
 /// The dynamic window approach (docs/baselines.md, "dwa"; docs/baselines_sampling.md).
 struct DwaSettings {
-  double horizon = 2.0;        ///< s each constant control is rolled out
+  double horizon = 1.5;        ///< s each constant control is rolled out
   int accel_samples = 7;       ///< samples of a across the window
   int yaw_rate_samples = 11;   ///< samples of omega across the window
   double max_jerk = 10.0;      ///< m/s^3: the window's half-width in a is this times dt
   double max_yaw_accel = 2.0;  ///< rad/s^2: the window's half-width in omega is this times dt
   double margin = 0.3;         ///< m the ego's box keeps from every predicted car
   double braking_decel = 4.0;  ///< m/s^2 both cars brake at in the "can stop safely" check
-  double desired_speed = 40.0 / 3.6;  ///< m/s the speed term pulls towards
+  /// Also keep Eq. 1's safe distances (scene.safe_distance) to the target
+  /// lane's cars wherever the body is in that lane, as the expert does.
+  bool keep_safe_distances = true;
+  double desired_speed = 50.0 / 3.6;  ///< m/s the speed term pulls towards
   double goal_preview = 1.5;      ///< s: the heading goal sits this far ahead on the lane centre
-  double weight_lateral = 1.0;    ///< per m of |y - goal lane centre| at the rollout's end
+  double weight_lateral = 3.0;    ///< per m of |y - goal lane centre| at the rollout's end
   double weight_heading = 3.0;    ///< per rad of heading error to the goal at the end
   double weight_clearance = 0.3;  ///< per 1/m of the smallest separation (capped)
   double weight_speed = 0.2;      ///< per m/s of |v - desired_speed| at the end
@@ -221,14 +224,17 @@ struct LatticeSettings {
   int speed_samples = 7;       ///< end speeds centred on the current speed
   double desired_speed = 40.0 / 3.6;  ///< m/s
   double margin = 0.3;                ///< m the ego's box keeps from every predicted car
-  double max_curvature = 0.2;         ///< 1/m
-  double max_heading = 0.35;          ///< rad from the road's direction
-  double weight_jerk = 0.1;           ///< per (m/s^3)^2 s, on each axis's jerk integral
-  double weight_duration = 0.1;       ///< per s of duration, on each axis
-  double weight_offset = 1.0;         ///< per m^2 of end offset from the target-lane centre
-  double weight_speed = 1.0;          ///< per (m/s)^2 of end speed from desired_speed
-  double weight_lateral = 1.0;        ///< the lateral cost's weight in the sum
-  double weight_longitudinal = 1.0;   ///< the longitudinal cost's weight in the sum
+  /// Also keep Eq. 1's safe distances (scene.safe_distance) to the target
+  /// lane's cars wherever the body is in that lane, as the expert does.
+  bool keep_safe_distances = true;
+  double max_curvature = 0.2;        ///< 1/m
+  double max_heading = 0.35;         ///< rad from the road's direction
+  double weight_jerk = 0.1;          ///< per (m/s^3)^2 s, on each axis's jerk integral
+  double weight_duration = 0.1;      ///< per s of duration, on each axis
+  double weight_offset = 1.0;        ///< per m^2 of end offset from the target-lane centre
+  double weight_speed = 1.0;         ///< per (m/s)^2 of end speed from desired_speed
+  double weight_lateral = 1.0;       ///< the lateral cost's weight in the sum
+  double weight_longitudinal = 1.0;  ///< the longitudinal cost's weight in the sum
 };
 
 struct Config {

@@ -151,6 +151,7 @@ void visit_fields(V& v, S& s) requires std::same_as<std::remove_const_t<S>, DwaS
   v("max_yaw_accel", s.max_yaw_accel);
   v("margin", s.margin);
   v("braking_decel", s.braking_decel);
+  v("keep_safe_distances", s.keep_safe_distances);
   v("desired_speed", s.desired_speed);
   v("goal_preview", s.goal_preview);
   v("weight_lateral", s.weight_lateral);
@@ -169,6 +170,7 @@ void visit_fields(V& v, S& s) requires std::same_as<std::remove_const_t<S>, Latt
   v("speed_samples", s.speed_samples);
   v("desired_speed", s.desired_speed);
   v("margin", s.margin);
+  v("keep_safe_distances", s.keep_safe_distances);
   v("max_curvature", s.max_curvature);
   v("max_heading", s.max_heading);
   v("weight_jerk", s.weight_jerk);
