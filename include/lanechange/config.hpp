@@ -193,11 +193,49 @@ struct ClosedLoopSettings {
 /// The paper's MPC baseline (docs/baselines.md, "mpc").
 struct MpcSettings {};
 
-/// The dynamic window approach (docs/baselines.md, "dwa").
-struct DwaSettings {};
+/// The dynamic window approach (docs/baselines.md, "dwa"; docs/baselines_sampling.md).
+struct DwaSettings {
+  double horizon = 1.5;        ///< s each constant control is rolled out
+  int accel_samples = 7;       ///< samples of a across the window
+  int yaw_rate_samples = 11;   ///< samples of omega across the window
+  double max_jerk = 10.0;      ///< m/s^3: the window's half-width in a is this times dt
+  double max_yaw_accel = 2.0;  ///< rad/s^2: the window's half-width in omega is this times dt
+  double margin = 0.3;         ///< m the ego's box keeps from every predicted car
+  double braking_decel = 4.0;  ///< m/s^2 both cars brake at in the "can stop safely" check
+  /// Also keep Eq. 1's safe distances (scene.safe_distance) to the target
+  /// lane's cars wherever the body is in that lane, as the expert does.
+  bool keep_safe_distances = true;
+  double desired_speed = 50.0 / 3.6;  ///< m/s the speed term pulls towards
+  double goal_preview = 1.5;      ///< s: the heading goal sits this far ahead on the lane centre
+  double weight_lateral = 3.0;    ///< per m of |y - goal lane centre| at the rollout's end
+  double weight_heading = 3.0;    ///< per rad of heading error to the goal at the end
+  double weight_clearance = 0.3;  ///< per 1/m of the smallest separation (capped)
+  double weight_speed = 0.2;      ///< per m/s of |v - desired_speed| at the end
+};
 
-/// The Frenet lattice planner of Werling et al. 2010 (docs/baselines.md, "lattice").
-struct LatticeSettings {};
+/// The Frenet lattice planner of Werling et al. 2010 (docs/baselines.md, "lattice";
+/// docs/baselines_sampling.md).
+struct LatticeSettings {
+  double min_duration = 3.0;   ///< s: the shortest sampled manoeuvre duration
+  double max_duration = 5.0;   ///< s: the longest, also the horizon every candidate is checked over
+  int duration_samples = 3;    ///< durations evenly from min to max
+  double offset_spread = 0.5;  ///< m: end offsets w - spread, w, w + spread besides 0 and w
+  double speed_step = 1.0;     ///< m/s between sampled end speeds
+  int speed_samples = 7;       ///< end speeds centred on the current speed
+  double desired_speed = 40.0 / 3.6;  ///< m/s
+  double margin = 0.3;                ///< m the ego's box keeps from every predicted car
+  /// Also keep Eq. 1's safe distances (scene.safe_distance) to the target
+  /// lane's cars wherever the body is in that lane, as the expert does.
+  bool keep_safe_distances = true;
+  double max_curvature = 0.2;        ///< 1/m
+  double max_heading = 0.35;         ///< rad from the road's direction
+  double weight_jerk = 0.1;          ///< per (m/s^3)^2 s, on each axis's jerk integral
+  double weight_duration = 0.1;      ///< per s of duration, on each axis
+  double weight_offset = 1.0;        ///< per m^2 of end offset from the target-lane centre
+  double weight_speed = 1.0;         ///< per (m/s)^2 of end speed from desired_speed
+  double weight_lateral = 1.0;       ///< the lateral cost's weight in the sum
+  double weight_longitudinal = 1.0;  ///< the longitudinal cost's weight in the sum
+};
 
 struct Config {
   std::string preset = "paper";

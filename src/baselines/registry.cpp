@@ -1,6 +1,8 @@
 #include <algorithm>
 #include <array>
 
+#include "baselines/dwa.hpp"
+#include "baselines/lattice.hpp"
 #include "lanechange/baselines/baselines.hpp"
 #include "lanechange/error.hpp"
 
@@ -16,7 +18,10 @@ struct Entry {
 };
 
 // One line per baseline, in the order docs/baselines.md lists them.
-constexpr std::array<Entry, 0> kBaselines{{}};
+constexpr std::array<Entry, 2> kBaselines{{
+    {"dwa", make_dwa_planner},
+    {"lattice", make_lattice_planner},
+}};
 
 }  // namespace
 

@@ -26,6 +26,43 @@ void validate_closed_loop(const ClosedLoopSettings& c) {
   require(c.lookahead >= 0, "closed_loop.lookahead", "must not be negative");
 }
 
+void validate_dwa(const DwaSettings& d) {
+  require(d.horizon > 0 && d.horizon <= 10, "dwa.horizon", "must be in (0, 10] s");
+  require(d.accel_samples >= 1 && d.accel_samples <= 101, "dwa.accel_samples",
+          "must be in [1, 101]");
+  require(d.yaw_rate_samples >= 1 && d.yaw_rate_samples <= 101, "dwa.yaw_rate_samples",
+          "must be in [1, 101]");
+  require(d.max_jerk > 0, "dwa.max_jerk", "must be positive");
+  require(d.max_yaw_accel > 0, "dwa.max_yaw_accel", "must be positive");
+  require(d.margin >= 0, "dwa.margin", "must not be negative");
+  require(d.braking_decel > 0, "dwa.braking_decel", "must be positive");
+  require(d.desired_speed >= 0, "dwa.desired_speed", "must not be negative");
+  require(d.goal_preview > 0, "dwa.goal_preview", "must be positive");
+  require(d.weight_lateral >= 0 && d.weight_heading >= 0 && d.weight_clearance >= 0 &&
+              d.weight_speed >= 0,
+          "dwa", "weights must not be negative");
+}
+
+void validate_lattice(const LatticeSettings& l) {
+  require(l.min_duration > 0, "lattice.min_duration", "must be positive");
+  require(l.max_duration >= l.min_duration && l.max_duration <= 20, "lattice.max_duration",
+          "must be in [min_duration, 20] s");
+  require(l.duration_samples >= 1 && l.duration_samples <= 50, "lattice.duration_samples",
+          "must be in [1, 50]");
+  require(l.offset_spread >= 0, "lattice.offset_spread", "must not be negative");
+  require(l.speed_step > 0, "lattice.speed_step", "must be positive");
+  require(l.speed_samples >= 1 && l.speed_samples <= 101, "lattice.speed_samples",
+          "must be in [1, 101]");
+  require(l.desired_speed >= 0, "lattice.desired_speed", "must not be negative");
+  require(l.margin >= 0, "lattice.margin", "must not be negative");
+  require(l.max_curvature > 0, "lattice.max_curvature", "must be positive");
+  require(l.max_heading > 0 && l.max_heading < 1.5, "lattice.max_heading",
+          "must be in (0, 1.5) rad");
+  require(l.weight_jerk >= 0 && l.weight_duration >= 0 && l.weight_offset >= 0 &&
+              l.weight_speed >= 0 && l.weight_lateral >= 0 && l.weight_longitudinal >= 0,
+          "lattice", "weights must not be negative");
+}
+
 }  // namespace
 
 void Config::validate() const {
@@ -71,6 +108,8 @@ void Config::validate() const {
   require(sampler.leader_headway.lo >= 0, "sampler.leader_headway", "must not be negative");
   require(sampler.gap_length.lo >= 0, "sampler.gap_length", "must not be negative");
   validate_closed_loop(closed_loop);
+  validate_dwa(dwa);
+  validate_lattice(lattice);
 }
 
 namespace {

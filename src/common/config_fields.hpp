@@ -143,11 +143,43 @@ template <class V, class S>
 void visit_fields(V& /*v*/, S& /*s*/) requires std::same_as<std::remove_const_t<S>, MpcSettings> {}
 
 template <class V, class S>
-void visit_fields(V& /*v*/, S& /*s*/) requires std::same_as<std::remove_const_t<S>, DwaSettings> {}
+void visit_fields(V& v, S& s) requires std::same_as<std::remove_const_t<S>, DwaSettings> {
+  v("horizon", s.horizon);
+  v("accel_samples", s.accel_samples);
+  v("yaw_rate_samples", s.yaw_rate_samples);
+  v("max_jerk", s.max_jerk);
+  v("max_yaw_accel", s.max_yaw_accel);
+  v("margin", s.margin);
+  v("braking_decel", s.braking_decel);
+  v("keep_safe_distances", s.keep_safe_distances);
+  v("desired_speed", s.desired_speed);
+  v("goal_preview", s.goal_preview);
+  v("weight_lateral", s.weight_lateral);
+  v("weight_heading", s.weight_heading);
+  v("weight_clearance", s.weight_clearance);
+  v("weight_speed", s.weight_speed);
+}
 
 template <class V, class S>
-void visit_fields(V& /*v*/,
-                  S& /*s*/) requires std::same_as<std::remove_const_t<S>, LatticeSettings> {}
+void visit_fields(V& v, S& s) requires std::same_as<std::remove_const_t<S>, LatticeSettings> {
+  v("min_duration", s.min_duration);
+  v("max_duration", s.max_duration);
+  v("duration_samples", s.duration_samples);
+  v("offset_spread", s.offset_spread);
+  v("speed_step", s.speed_step);
+  v("speed_samples", s.speed_samples);
+  v("desired_speed", s.desired_speed);
+  v("margin", s.margin);
+  v("keep_safe_distances", s.keep_safe_distances);
+  v("max_curvature", s.max_curvature);
+  v("max_heading", s.max_heading);
+  v("weight_jerk", s.weight_jerk);
+  v("weight_duration", s.weight_duration);
+  v("weight_offset", s.weight_offset);
+  v("weight_speed", s.weight_speed);
+  v("weight_lateral", s.weight_lateral);
+  v("weight_longitudinal", s.weight_longitudinal);
+}
 
 template <class V, class S>
 void visit_fields(V& v, S& s) requires std::same_as<std::remove_const_t<S>, Config> {

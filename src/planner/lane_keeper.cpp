@@ -102,6 +102,11 @@ EgoControl fallback_control(const LaneKeeper& keeper, const Observation& o) {
   return u;
 }
 
+bool body_on_road(double y, const Scenario& scene) {
+  const double half_body = scene.vehicle.width / 2.0;
+  return y - half_body >= -scene.lane_width / 2.0 && y + half_body <= 1.5 * scene.lane_width;
+}
+
 bool clip_to_limits(EgoControl& control, const EgoState& ego, const Limits& limits, double dt) {
   const EgoControl wanted = control;
   // A non-finite control is no control: hold speed and heading rate.

@@ -218,13 +218,7 @@ std::string MlpMiqpSession::check_ahead(const Observation& now, EgoControl first
     for (const Car c : kAllCars) o.cars[static_cast<std::size_t>(c)] = traffic.car(c);
     path.push_back(o.ego);
     record_cars();
-    // The road's edges, not the expert's planning margin: the body must stay
-    // within the outer edges of the two lanes.
-    const double half_body = scene.vehicle.width / 2.0;
-    const double lower_edge = -scene.lane_width / 2.0;
-    const double upper_edge = 1.5 * scene.lane_width;
-    if (!limits.v.contains(o.ego.v) || o.ego.y - half_body < lower_edge ||
-        o.ego.y + half_body > upper_edge) {
+    if (!limits.v.contains(o.ego.v) || !body_on_road(o.ego.y, scene)) {
       char what[160];
       std::snprintf(what, sizeof what,
                     "the network leaves the speed or road bounds %d steps ahead (v %.2f m/s, "

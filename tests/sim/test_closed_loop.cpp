@@ -10,6 +10,7 @@
 #include "lanechange/sampler.hpp"
 #include "lanechange/sim/simulator.hpp"
 #include "lanechange/traffic.hpp"
+#include "rollout_checks.hpp"
 #include "test_helpers.hpp"
 
 namespace lanechange {
@@ -47,40 +48,12 @@ class ScriptedPlanner final : public planner::ClosedLoopPlanner {
   Script script_;
 };
 
-// The checks every rollout must pass: the ego follows its controls through
-// the exact model, the cars follow their behavior (reacting to the real ego),
-// the collision flag is what the boxes say, and the limits hold.
-void expect_consistent(const sim::Rollout& r, const Scenario& s) {
-  const Trajectory& t = r.trajectory;
-  ASSERT_EQ(t.nodes(), static_cast<int>(r.steps.size()) + 1);
-  TrafficModel traffic(s, Config{});
-  EgoState ego = s.ego;
-  for (int k = 0; k + 1 < t.nodes(); ++k) {
-    const EgoControl u = t.controls[k];
-    EXPECT_TRUE(s.limits.a.contains(u.a)) << "step " << k;
-    EXPECT_TRUE(s.limits.omega.contains(u.omega)) << "step " << k;
-    traffic.step(t.dt, {ego.x, ego.y, ego.v});
-    ego = step_exact(ego, u, t.dt);
-    EXPECT_NEAR(t.ego[k + 1].x, ego.x, 1e-9) << "step " << k;
-    EXPECT_NEAR(t.ego[k + 1].y, ego.y, 1e-9) << "step " << k;
-    EXPECT_GE(t.ego[k + 1].v, s.limits.v.lo - 1e-9);
-    EXPECT_LE(t.ego[k + 1].v, s.limits.v.hi + 1e-9);
-    for (const Car c : kAllCars) {
-      EXPECT_NEAR(t.others.car(c).x[k + 1], traffic.car(c).x, 1e-9) << to_string(c) << " " << k;
-    }
-  }
-  EXPECT_EQ(t.collision, first_collision(t.ego, t.others, s).has_value());
-  if (t.collision) {
-    EXPECT_EQ(r.outcome, Outcome::Failure);
-  }
-}
-
 TEST(ClosedLoop, ExpertChangesLanesIntoAWideOpenGap) {
   const Config config = testing::untimed_config();
   const Scenario s = open_road();
   const auto miqp = planner::make_planner("miqp", config);
   const sim::Rollout r = sim::simulate(s, *miqp, config);
-  expect_consistent(r, s);
+  testing::expect_consistent(r, s);
   EXPECT_EQ(r.outcome, Outcome::WellPosed) << r.reason;
   EXPECT_FALSE(r.trajectory.collision);
   EXPECT_GT(r.manoeuvre_over_at, 0.0);
@@ -93,7 +66,7 @@ TEST(ClosedLoop, NoGapIsAbortedWithoutCollision) {
   for (const char* name : {"miqp", "keep-lane"}) {
     const auto p = planner::make_planner(name, config);
     const sim::Rollout r = sim::simulate(s, *p, config);
-    expect_consistent(r, s);
+    testing::expect_consistent(r, s);
     EXPECT_EQ(r.outcome, Outcome::Aborted) << name << ": " << r.reason;
     EXPECT_FALSE(r.trajectory.collision) << name;
     EXPECT_GT(r.metrics.fallbacks, 0) << name;
@@ -108,7 +81,7 @@ TEST(ClosedLoop, SampledRolloutsAreConsistent) {
     const Scenario s = sampler.sample(i);
     const sim::Rollout r = sim::simulate(s, *miqp, config);
     SCOPED_TRACE("scenario " + std::to_string(i));
-    expect_consistent(r, s);
+    testing::expect_consistent(r, s);
   }
 }
 
@@ -123,7 +96,7 @@ TEST(ClosedLoop, IdmFollowerBrakesForAnEgoThatCutsIn) {
     return Decision{{0.0, 2.0 * (wanted - o.ego.theta)}, ActStatus::Planned, ""};
   });
   const sim::Rollout r = sim::simulate(s, cut_in, config, {4.0});
-  expect_consistent(r, s);
+  testing::expect_consistent(r, s);
   const CarTrack& follower = r.trajectory.others.car(Car::Follower);
   double hardest = 0.0;
   for (double a : follower.a) hardest = std::min(hardest, a);
@@ -144,7 +117,7 @@ TEST(ClosedLoop, AThrowingOrSlowPlannerIsRecordedAndTheFallbackActs) {
     return {{0.0, 0.4}, ActStatus::Planned, ""};
   });
   const sim::Rollout r = sim::simulate(s, bad, config, {1.0});
-  expect_consistent(r, s);
+  testing::expect_consistent(r, s);
   EXPECT_EQ(r.steps[3].status, ActStatus::Failed);
   EXPECT_NE(r.steps[3].reason.find("boom"), std::string::npos);
   EXPECT_TRUE(r.steps[5].overrun);

@@ -89,6 +89,10 @@ class LaneKeeper {
 /// chooses.
 [[nodiscard]] EgoControl fallback_control(const LaneKeeper& keeper, const Observation& observation);
 
+/// True when the ego's body (centre y) stays within the outer edges of the two
+/// lanes: the road, not the expert's planning margin.
+[[nodiscard]] bool body_on_road(double y, const Scenario& scene);
+
 /// Clips a control to the ego's limits, also keeping the speed within its
 /// bounds over the next step. Returns true when it had to.
 bool clip_to_limits(EgoControl& control, const EgoState& ego, const Limits& limits, double dt);

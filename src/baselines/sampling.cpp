@@ -1,0 +1,63 @@
+#include "baselines/sampling.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "lanechange/geometry.hpp"
+#include "planner/miqp_planner.hpp"
+
+namespace lanechange::baselines {
+
+bool lane_change_on(const planner::Observation& o) {
+  const Scenario& s = *o.scene;
+  return o.t <= s.horizon + 1e-9 ||
+         body_in_lane(o.ego.y, s.vehicle.width, s.lane_width, s.lane_width);
+}
+
+TrafficPrediction predict_from(const planner::Observation& o, const Config& config, int steps) {
+  const Scenario now = planner::scene_now(o, config);
+  return predict_traffic(now, config, steps, o.scene->horizon / o.scene->steps);
+}
+
+double min_separation(std::span<const EgoState> path, const TrafficPrediction& cars,
+                      const Scenario& scene, double cap) {
+  const double length = scene.vehicle.length;
+  const double width = scene.vehicle.width;
+  // Two boxes whose centres are further apart than their circumscribed
+  // circles plus the cap cannot come closer than the cap.
+  const double reach = std::hypot(length, width) + cap;
+  const int nodes = std::min(static_cast<int>(path.size()), cars.nodes());
+  double closest = cap;
+  for (int k = 0; k < nodes; ++k) {
+    const EgoState& e = path[static_cast<std::size_t>(k)];
+    const OrientedBox ego{e.x, e.y, e.theta, length, width};
+    for (const Car c : kAllCars) {
+      const double x = cars.car(c).x[static_cast<std::size_t>(k)];
+      const double y = scene.lane_center(c);
+      if (std::hypot(x - e.x, y - e.y) > reach) continue;
+      closest = std::min(closest, -overlap_depth(ego, {x, y, 0.0, length, width}));
+    }
+  }
+  return closest;
+}
+
+bool keeps_target_lane_distances(std::span<const EgoState> path, const TrafficPrediction& cars,
+                                 const Scenario& scene) {
+  const int nodes = std::min(static_cast<int>(path.size()), cars.nodes());
+  for (int k = 1; k < nodes; ++k) {
+    const EgoState& e = path[static_cast<std::size_t>(k)];
+    if (!body_in_lane(e.y, scene.vehicle.width, scene.lane_width, scene.lane_width)) continue;
+    for (const Car c : {Car::Follower, Car::Target}) {
+      const auto i = static_cast<std::size_t>(k);
+      const double ahead_by = cars.car(c).x[i] - e.x;
+      const SafeDistance& d =
+          c == Car::Follower ? scene.safe_distance.follower : scene.safe_distance.target;
+      const double needed =
+          d.standstill + d.time_headway * (ahead_by >= 0 ? e.v : cars.car(c).v[i]);
+      if (std::abs(ahead_by) < needed) return false;
+    }
+  }
+  return true;
+}
+
+}  // namespace lanechange::baselines
