@@ -1,56 +1,15 @@
-// Closed-loop step times: one act() of a planner session, measured inside
-// whole rollouts of sampled scenes (the re-plan is warm-started from the
-// last plan, so a step is only meaningful in its rollout). Counters: the
-// median and 90th percentile of the steps the planner itself served (not the
-// lane keeper's), in ms of wall time; rollouts per second.
-// Environment: LANECHANGE_BENCH_LOOP_COUNT scenes (default 12).
-#include <benchmark/benchmark.h>
-
-#include <algorithm>
-#include <cstdlib>
-#include <vector>
-
-#include "lanechange/planner/planner.hpp"
-#include "lanechange/sampler.hpp"
-#include "lanechange/sim/simulator.hpp"
+// Closed-loop step times of our planners (see step_timing.hpp for what is
+// measured and how).
+#include "step_timing.hpp"
 
 namespace lc = lanechange;
 
 namespace {
 
-int scene_count() {
-  const char* v = std::getenv("LANECHANGE_BENCH_LOOP_COUNT");
-  return v != nullptr ? std::max(1, std::atoi(v)) : 12;
-}
-
-double percentile(std::vector<double> v, double q) {
-  if (v.empty()) return 0.0;
-  std::sort(v.begin(), v.end());
-  return v[static_cast<std::size_t>(q * static_cast<double>(v.size() - 1))];
-}
-
 void run_planner(benchmark::State& state, const char* name) {
   lc::Config config;
   config.closed_loop.step_budget_ms = 1e6;  // time every step, overrule none
-  const auto planner = lc::planner::make_planner(name, config);
-  const lc::ScenarioSampler sampler(config, 2026);
-  std::vector<double> steps;
-  long long rollouts = 0;
-  for (auto _ : state) {
-    for (int i = 0; i < scene_count(); ++i) {
-      const lc::sim::Rollout r =
-          lc::sim::simulate(sampler.sample(static_cast<std::uint64_t>(i)), *planner, config);
-      for (const auto& s : r.steps) {
-        if (!s.lane_keeping) steps.push_back(s.compute_ms);
-      }
-      ++rollouts;
-    }
-  }
-  state.counters["step_ms_median"] = percentile(steps, 0.5);
-  state.counters["step_ms_p90"] = percentile(steps, 0.9);
-  state.counters["step_ms_max"] = percentile(steps, 1.0);
-  state.counters["rollouts_per_s"] =
-      benchmark::Counter(static_cast<double>(rollouts), benchmark::Counter::kIsRate);
+  lc::bench::time_planner_steps(state, *lc::planner::make_planner(name, config), config);
 }
 
 void BM_MiqpClosedLoopStep(benchmark::State& state) { run_planner(state, "miqp"); }

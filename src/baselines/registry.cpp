@@ -1,6 +1,7 @@
 #include <algorithm>
 #include <array>
 
+#include "baselines/mpc.hpp"
 #include "lanechange/baselines/baselines.hpp"
 #include "lanechange/error.hpp"
 
@@ -16,7 +17,9 @@ struct Entry {
 };
 
 // One line per baseline, in the order docs/baselines.md lists them.
-constexpr std::array<Entry, 0> kBaselines{{}};
+constexpr std::array<Entry, 1> kBaselines{{
+    {"mpc", make_mpc_planner},
+}};
 
 }  // namespace
 

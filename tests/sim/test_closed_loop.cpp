@@ -10,6 +10,7 @@
 #include "lanechange/sampler.hpp"
 #include "lanechange/sim/simulator.hpp"
 #include "lanechange/traffic.hpp"
+#include "rollout_checks.hpp"
 #include "test_helpers.hpp"
 
 namespace lanechange {
@@ -19,6 +20,7 @@ using planner::ActStatus;
 using planner::Decision;
 using planner::Observation;
 using sim::Outcome;
+using testing::expect_consistent;
 
 Scenario open_road(Behavior behavior = Behavior::ConstantSpeed) {
   return testing::open_road_scenario(behavior);
@@ -46,34 +48,6 @@ class ScriptedPlanner final : public planner::ClosedLoopPlanner {
  private:
   Script script_;
 };
-
-// The checks every rollout must pass: the ego follows its controls through
-// the exact model, the cars follow their behavior (reacting to the real ego),
-// the collision flag is what the boxes say, and the limits hold.
-void expect_consistent(const sim::Rollout& r, const Scenario& s) {
-  const Trajectory& t = r.trajectory;
-  ASSERT_EQ(t.nodes(), static_cast<int>(r.steps.size()) + 1);
-  TrafficModel traffic(s, Config{});
-  EgoState ego = s.ego;
-  for (int k = 0; k + 1 < t.nodes(); ++k) {
-    const EgoControl u = t.controls[k];
-    EXPECT_TRUE(s.limits.a.contains(u.a)) << "step " << k;
-    EXPECT_TRUE(s.limits.omega.contains(u.omega)) << "step " << k;
-    traffic.step(t.dt, {ego.x, ego.y, ego.v});
-    ego = step_exact(ego, u, t.dt);
-    EXPECT_NEAR(t.ego[k + 1].x, ego.x, 1e-9) << "step " << k;
-    EXPECT_NEAR(t.ego[k + 1].y, ego.y, 1e-9) << "step " << k;
-    EXPECT_GE(t.ego[k + 1].v, s.limits.v.lo - 1e-9);
-    EXPECT_LE(t.ego[k + 1].v, s.limits.v.hi + 1e-9);
-    for (const Car c : kAllCars) {
-      EXPECT_NEAR(t.others.car(c).x[k + 1], traffic.car(c).x, 1e-9) << to_string(c) << " " << k;
-    }
-  }
-  EXPECT_EQ(t.collision, first_collision(t.ego, t.others, s).has_value());
-  if (t.collision) {
-    EXPECT_EQ(r.outcome, Outcome::Failure);
-  }
-}
 
 TEST(ClosedLoop, ExpertChangesLanesIntoAWideOpenGap) {
   const Config config = testing::untimed_config();
