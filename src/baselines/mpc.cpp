@@ -310,16 +310,27 @@ Decision MpcSession::act(const Observation& o) {
   return {fallback_control(keeper_, o), ActStatus::Fallback, why};
 }
 
+MpcPlan MpcSession::starting_point(int step, const Scenario& scene) const {
+  const double dt = scene.horizon / scene.steps;
+  const int age = plan_ ? step - plan_step_ : 0;
+  // A plan followed open loop for longer than the stale steps has drifted.
+  if (plan_ && age <= config_.closed_loop.stale_plan_steps) {
+    return shifted(*plan_, age, scene.steps, dt, scene.ego);
+  }
+  // A solve cut short by a limit goes on from where it stopped, so a hard
+  // start is spread over several steps instead of starting over every step.
+  const bool unfinished =
+      last_.status == MpcStatus::TimeLimit || last_.status == MpcStatus::IterationLimit;
+  if (unfinished && last_step_ == step - 1 && !last_.plan.controls.empty()) {
+    return shifted(last_.plan, 1, scene.steps, dt, scene.ego);
+  }
+  return cold_guess(scene);
+}
+
 std::string MpcSession::replan(const Observation& o) {
   const Scenario scene = planner::scene_now(o, config_);
-  const double dt = scene.horizon / scene.steps;
-  const int age = plan_ ? o.step - plan_step_ : 0;
-  // A plan followed open loop for longer than the stale steps has drifted:
-  // start over from a plain lane change instead.
-  const MpcPlan guess = plan_ && age <= config_.closed_loop.stale_plan_steps
-                            ? shifted(*plan_, age, scene.steps, dt, scene.ego)
-                            : cold_guess(scene);
-  last_ = solve_mpc(solver_, scene, config_, guess);
+  last_ = solve_mpc(solver_, scene, config_, starting_point(o.step, scene));
+  last_step_ = o.step;
   if (last_.status != MpcStatus::Solved) {
     std::string why(to_string(last_.status));
     if (!last_.message.empty()) {

@@ -80,6 +80,8 @@ class MpcSession final : public planner::PlannerSession {
  private:
   /// Solves from the observation; returns why it failed ("" on success).
   std::string replan(const planner::Observation& observation);
+  /// The shifted plan while fresh, else the unfinished last solve, else a cold guess.
+  [[nodiscard]] MpcPlan starting_point(int step, const Scenario& scene) const;
 
   const Config& config_;
   planner::LaneKeeper keeper_;
@@ -87,6 +89,7 @@ class MpcSession final : public planner::PlannerSession {
   std::optional<MpcPlan> plan_;
   int plan_step_ = 0;
   MpcResult last_;
+  int last_step_ = -1;  ///< the step of last_
 };
 
 class MpcPlanner final : public planner::ClosedLoopPlanner {
