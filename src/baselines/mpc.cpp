@@ -13,15 +13,11 @@ namespace lanechange::baselines {
 
 namespace {
 
+using expert::coin::milliseconds_since;
 using expert::coin::set_option;
 using planner::ActStatus;
 using planner::Decision;
 using planner::Observation;
-
-double milliseconds_since(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
-      .count();
-}
 
 // n equal circles along the body: each covers its slice of the length and
 // the full width, so the union covers the box.
@@ -90,6 +86,19 @@ MpcStatus status_of(Ipopt::ApplicationReturnStatus status) {
     case Ipopt::User_Requested_Stop: return MpcStatus::TimeLimit;
     default: return MpcStatus::NumericalError;
   }
+}
+
+std::string failure_message(Ipopt::ApplicationReturnStatus status) {
+  switch (status) {
+    case Ipopt::Infeasible_Problem_Detected: return "Ipopt converged to an infeasible point";
+    case Ipopt::Maximum_Iterations_Exceeded: return "the iteration limit ran out";
+    case Ipopt::Maximum_CpuTime_Exceeded: return "the CPU-time limit ran out";
+    case Ipopt::User_Requested_Stop: return "the wall-time limit ran out";
+    default: break;
+  }
+  std::string message = "Ipopt return status ";
+  message += std::to_string(static_cast<int>(status));
+  return message;
 }
 
 // The caller holds lock_coin_or_libraries().
@@ -280,10 +289,7 @@ MpcResult MpcSolver::solve(MpcProblemData data, MpcPlan guess, double time_limit
   if (Ipopt::SmartPtr<Ipopt::SolveStatistics> stats = app_->Statistics(); IsValid(stats)) {
     result.iterations = stats->IterationCount();
   }
-  if (result.status != MpcStatus::Solved) {
-    result.message = "Ipopt status ";
-    result.message += std::to_string(static_cast<int>(status));
-  }
+  if (result.status != MpcStatus::Solved) result.message = failure_message(status);
   return result;
 }
 
