@@ -190,8 +190,24 @@ struct ClosedLoopSettings {
   double lookahead = 1.0;             ///< s the hierarchical planner checks its policy ahead
 };
 
-/// The paper's MPC baseline (docs/baselines.md, "mpc").
-struct MpcSettings {};
+/// The paper's MPC baseline (docs/baselines.md, "mpc"). Its horizon, dt,
+/// weights and limits are the expert's; these are its own.
+struct MpcSettings {
+  int circles = 3;      ///< circles along each car's length (the ego's too)
+  double margin = 0.3;  ///< m kept between any ego circle and any other car's circle
+  /// ms of wall time per solve (Ipopt 3.11 has only a CPU limit; the
+  /// program's callback enforces the wall time)
+  double time_limit_ms = 80.0;
+  int max_iterations = 100;  ///< Ipopt iterations per solve
+  double tolerance = 1e-4;   ///< Ipopt's tol
+  /// End the horizon in the gap: y_N = w (the expert's fixed terminal
+  /// lateral) and x_N between the follower's and target's safe distances.
+  bool terminal_gap = true;
+  /// m: a car's circles at a node enter the program only where the starting
+  /// point passes within this of touching them (the solution is checked
+  /// against the rest, and solved again around itself where it reaches them).
+  double gate_distance = 3.0;
+};
 
 /// The dynamic window approach (docs/baselines.md, "dwa"; docs/baselines_sampling.md).
 struct DwaSettings {

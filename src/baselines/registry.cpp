@@ -3,6 +3,7 @@
 
 #include "baselines/dwa.hpp"
 #include "baselines/lattice.hpp"
+#include "baselines/mpc.hpp"
 #include "lanechange/baselines/baselines.hpp"
 #include "lanechange/error.hpp"
 
@@ -18,7 +19,8 @@ struct Entry {
 };
 
 // One line per baseline, in the order docs/baselines.md lists them.
-constexpr std::array<Entry, 2> kBaselines{{
+constexpr std::array<Entry, 3> kBaselines{{
+    {"mpc", make_mpc_planner},
     {"dwa", make_dwa_planner},
     {"lattice", make_lattice_planner},
 }};

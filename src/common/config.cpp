@@ -63,6 +63,17 @@ void validate_lattice(const LatticeSettings& l) {
           "lattice", "weights must not be negative");
 }
 
+void validate_mpc(const MpcSettings& m) {
+  require(m.circles >= 1 && m.circles <= 20, "mpc.circles", "must be between 1 and 20");
+  require(std::isfinite(m.margin) && m.margin >= 0, "mpc.margin", "must not be negative");
+  require(std::isfinite(m.time_limit_ms) && m.time_limit_ms > 0, "mpc.time_limit_ms",
+          "must be positive");
+  require(m.max_iterations >= 1, "mpc.max_iterations", "must be at least 1");
+  require(std::isfinite(m.tolerance) && m.tolerance > 0, "mpc.tolerance", "must be positive");
+  require(std::isfinite(m.gate_distance) && m.gate_distance >= 0, "mpc.gate_distance",
+          "must not be negative");
+}
+
 }  // namespace
 
 void Config::validate() const {
@@ -110,6 +121,7 @@ void Config::validate() const {
   validate_closed_loop(closed_loop);
   validate_dwa(dwa);
   validate_lattice(lattice);
+  validate_mpc(mpc);
 }
 
 namespace {

@@ -140,7 +140,15 @@ void visit_fields(V& v, S& s) requires std::same_as<std::remove_const_t<S>, Samp
 }
 
 template <class V, class S>
-void visit_fields(V& /*v*/, S& /*s*/) requires std::same_as<std::remove_const_t<S>, MpcSettings> {}
+void visit_fields(V& v, S& s) requires std::same_as<std::remove_const_t<S>, MpcSettings> {
+  v("circles", s.circles);
+  v("margin", s.margin);
+  v("time_limit_ms", s.time_limit_ms);
+  v("max_iterations", s.max_iterations);
+  v("tolerance", s.tolerance);
+  v("terminal_gap", s.terminal_gap);
+  v("gate_distance", s.gate_distance);
+}
 
 template <class V, class S>
 void visit_fields(V& v, S& s) requires std::same_as<std::remove_const_t<S>, DwaSettings> {

@@ -20,6 +20,7 @@ using planner::ActStatus;
 using planner::Decision;
 using planner::Observation;
 using sim::Outcome;
+using testing::expect_consistent;
 
 Scenario open_road(Behavior behavior = Behavior::ConstantSpeed) {
   return testing::open_road_scenario(behavior);
