@@ -1,6 +1,6 @@
 #pragma once
 // The dynamic window approach (Fox, Burgard and Thrun 1997) for the unicycle
-// (docs/baselines_sampling.md, "dwa"): every step, sample (a, omega) in the
+// (docs/baselines.md, "dwa"): every step, sample (a, omega) in the
 // window reachable from the last control within one step, roll each out at
 // constant control against the predicted cars, keep the admissible ones and
 // apply the best scored.

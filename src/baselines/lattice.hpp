@@ -1,6 +1,6 @@
 #pragma once
 // The Frenet lattice planner of Werling et al. 2010, as Apollo's lattice
-// planner and TUM's Frenetix follow it (docs/baselines_sampling.md,
+// planner and TUM's Frenetix follow it (docs/baselines.md,
 // "lattice"): on the straight road s = x and d = y. Every step, quintic
 // lateral and quartic (speed keeping) or quintic (following) longitudinal
 // polynomials are sampled from the current state, priced, and checked in
