@@ -181,7 +181,7 @@ std::vector<ExampleScene> example_scenes(const Context& c, const std::vector<sim
     }
     scenes.push_back({"ill_posed_" + std::to_string(++ill_posed), key.first, key.second,
                       "planned ill-posed by the expert, open loop"});
-    if (scenes.size() == 4) break;
+    if (static_cast<int>(scenes.size()) >= c.sizes.example_scenes) break;
   }
   return scenes;
 }
@@ -250,9 +250,9 @@ Scale scale_from_string(std::string_view name, std::string_view field) {
 
 ExperimentSizes sizes_of(Scale scale) {
   switch (scale) {
-    case Scale::Tiny: return {12, 2, true, 20};
-    case Scale::Small: return {150, 20, true, 150};
-    case Scale::Paper: return {5000, 500, false, 300};
+    case Scale::Tiny: return {12, 2, true, 20, 2};
+    case Scale::Small: return {150, 20, true, 150, 4};
+    case Scale::Paper: return {5000, 500, false, 300, 4};
   }
   return {};
 }

@@ -29,6 +29,9 @@ struct ExperimentSizes {
   long long eval_per_behavior = 0;  ///< closed-loop scenarios per behavior
   bool quick_search = false;        ///< smaller hyperparameter grids
   int max_epochs = 300;             ///< of the action network
+  /// Scenes drawn for every planner: a congested one and ill-posed ones (the
+  /// paper's Figs. 4 and 5).
+  int example_scenes = 4;
 };
 [[nodiscard]] ExperimentSizes sizes_of(Scale scale);
 
