@@ -171,9 +171,9 @@ std::string too_close_in_target_lane(const Observation& o, const Scenario& scene
   if (o.ego.x < follower.x + d.follower.standstill + d.follower.time_headway * follower.v) {
     return "the network would enter the target lane short of the follower's safe distance";
   }
-  if (target.x >= o.ego.x &&
-      o.ego.x + d.target.time_headway * o.ego.v > target.x - d.target.standstill) {
-    return "the network would close in on the target within its safe distance";
+  // Likewise ahead of the target (when it is behind, passing the ego).
+  if (o.ego.x + d.target.time_headway * o.ego.v > target.x - d.target.standstill) {
+    return "the network would enter the target lane short of the target's safe distance";
   }
   return "";
 }
