@@ -71,6 +71,7 @@ void Config::validate() const {
   require(sampler.leader_headway.lo >= 0, "sampler.leader_headway", "must not be negative");
   require(sampler.gap_length.lo >= 0, "sampler.gap_length", "must not be negative");
   validate_closed_loop(closed_loop);
+  require(strategy_qp.candidates >= 1, "strategy_qp.candidates", "must be at least 1");
 }
 
 namespace {
