@@ -40,9 +40,9 @@ Eigen::VectorXd node_features(const Eigen::RowVectorXd& z, double last_a, double
   Scenario scene;
   scene.behavior = static_cast<Behavior>(behavior);
   scene.ego = {z(c.x), z(c.y), z(c.v), z(c.theta), last_a};
-  for (int i = 0; i < 3; ++i) {
-    scene.car(static_cast<Car>(i)) = {z(c.cars + 3 * i), z(c.cars + 3 * i + 1),
-                                      z(c.cars + 3 * i + 2)};
+  for (Eigen::Index i = 0; i < 3; ++i) {
+    const Eigen::Index at = c.cars + 3 * i;  // x, v, a of car i
+    scene.car(static_cast<Car>(i)) = {z(at), z(at + 1), z(at + 2)};
   }
   scene.horizon = horizon_left;
   return strategy_features(scene);
@@ -54,6 +54,7 @@ void add_plan(const LearningData& data, const std::vector<int>& rows, int stride
   static const NodeColumns c;
   const PlanNodeTable& t = data.plan_nodes;
   std::vector<int> modes;
+  modes.reserve(rows.size());
   for (int r : rows) modes.push_back(t.lane_mode[static_cast<std::size_t>(r)]);
   const int last = static_cast<int>(rows.size()) - 1;
   const double end_time = t.states(rows.back(), c.t);

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 
 #include "lanechange/error.hpp"
 
@@ -13,14 +14,6 @@ using Clock = std::chrono::steady_clock;
 
 double ms_since(Clock::time_point start) {
   return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
-}
-
-// The fixed-strategy rounds stop where the plain rounds do: a candidate that
-// cycles is dropped, and the exact search (with its trust region) is there
-// for the scenes where every candidate fails.
-Config fixed_mode_config(Config config) {
-  config.expert.globalisation = Globalisation::Off;
-  return config;
 }
 
 }  // namespace
@@ -40,7 +33,7 @@ StrategyQpPlanner::StrategyQpPlanner(Config config,
                                      std::shared_ptr<const learn::StrategyModel> model)
     : config_(closed_loop_expert(std::move(config))),
       model_(std::move(model)),
-      fixed_(fixed_mode_config(config_), std::make_shared<expert::FixedModeLaneChangeSolver>()),
+      fixed_(config_, std::make_shared<expert::FixedModeLaneChangeSolver>()),
       exact_(config_, std::make_shared<expert::FastLaneChangeSolver>()) {
   if (!model_) throw InputError("--model", "strategy-qp needs a lane-strategy model");
 }
@@ -54,6 +47,7 @@ CandidateOutcome StrategyQpPlanner::solve_candidate(const Scenario& scene,
   CandidateOutcome out;
   out.status = result.status;
   out.objective = result.objective;
+  out.rescued = !result.rounds.empty() && std::isfinite(result.rounds.back().trust_radius);
   if (result.status == expert::PlanStatus::Converged) {
     out.collision = fixed_.to_trajectory(result, scene).collision;
   }
@@ -79,6 +73,7 @@ StrategyPlan StrategyQpPlanner::plan(const Scenario& scene, const expert::PlanLi
     tried.push_back(modes_of_strategy(predicted[i], scene.steps, rule));
   }
   expert::ExpertResult candidate;
+  std::vector<int> rescued_hint;
   for (std::size_t i = 0; i < tried.size(); ++i) {
     // Two strategies may agree on this horizon: one solve is enough.
     if (std::find(tried.begin(), tried.begin() + static_cast<std::ptrdiff_t>(i), tried[i]) !=
@@ -88,17 +83,23 @@ StrategyPlan StrategyQpPlanner::plan(const Scenario& scene, const expert::PlanLi
     CandidateOutcome o = solve_candidate(scene, tried[i], limits, hints, candidate);
     o.strategy = predicted[i];
     out.candidates.push_back(o);
-    const bool better = out.chosen < 0 || o.objective < out.result.objective;
-    if (o.feasible() && better) {
+    // Only plans of the plain rounds are followed: one the trust region
+    // rescued may have stopped in a box far from any fixed point (hundreds
+    // of times the optimum's cost in the study); its modes still make the
+    // best hint for the exact search.
+    if (o.feasible() && o.rescued && rescued_hint.empty()) rescued_hint = tried[i];
+    if (!o.feasible() || o.rescued) continue;
+    if (out.chosen < 0 || o.objective < out.result.objective) {
       out.chosen = static_cast<int>(out.candidates.size()) - 1;
       out.result = std::move(candidate);
       if (config_.strategy_qp.first_feasible) break;
     }
   }
   if (out.chosen < 0) {
-    // No candidate holds: the exact search, started from the most likely.
-    const std::vector<int>* first = tried.empty() ? nullptr : &tried.front();
-    out.result = exact_.plan(scene, limits, {hints.path, first});
+    // No candidate holds: the exact search, started from the likeliest modes.
+    if (rescued_hint.empty() && !tried.empty()) rescued_hint = tried.front();
+    out.result =
+        exact_.plan(scene, limits, {hints.path, rescued_hint.empty() ? nullptr : &rescued_hint});
   }
   out.total_ms = ms_since(start);
   out.result.total_ms = out.total_ms;

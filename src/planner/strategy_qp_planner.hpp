@@ -19,6 +19,7 @@ struct CandidateOutcome {
   learn::Strategy strategy;  ///< empty for the last plan's modes (closed loop)
   expert::PlanStatus status = expert::PlanStatus::SolverError;
   bool collision = false;
+  bool rescued = false;  ///< converged in the trust region (expert.globalisation)
   double objective = expert::kInfinity;
   [[nodiscard]] bool feasible() const {
     return status == expert::PlanStatus::Converged && !collision;

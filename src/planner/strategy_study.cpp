@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <map>
 #include <vector>
 
 #include "lanechange/error.hpp"
@@ -33,7 +34,9 @@ json summary(const std::vector<double>& v) {
 
 // What one scene contributes.
 struct Tally {
-  long long scenes = 0, expert_plans = 0, top1 = 0, topk = 0, fallbacks = 0;
+  long long scenes = 0, expert_plans = 0, top1 = 0, topk = 0, followed = 0, fallbacks = 0;
+  // Why the candidates of the scenes with an expert plan failed.
+  std::map<std::string, long long> candidate_outcomes;
   std::vector<double> ratio, ratio_learned, strategy_ms, expert_ms, strategy_ms_learned;
 };
 
@@ -48,9 +51,18 @@ void add_scene(const StrategyQpPlanner& planner, const Scenario& scene, Tally& t
   if (learned.chosen >= 0) t.strategy_ms_learned.push_back(learned.total_ms);
   if (!expert_found) return;
   ++t.expert_plans;
-  const bool first = !learned.candidates.empty() && learned.candidates.front().feasible();
+  for (const CandidateOutcome& c : learned.candidates) {
+    std::string what(expert::to_string(c.status));
+    if (c.status == expert::PlanStatus::Converged) {
+      what = c.collision ? "collision" : c.rescued ? "feasible_trust_region" : "feasible";
+    }
+    ++t.candidate_outcomes[what];
+  }
+  const auto& c = learned.candidates;
+  const bool first = !c.empty() && c.front().feasible();
   t.top1 += first ? 1 : 0;
-  t.topk += learned.chosen >= 0 ? 1 : 0;
+  t.topk += std::any_of(c.begin(), c.end(), [](const auto& o) { return o.feasible(); }) ? 1 : 0;
+  t.followed += learned.chosen >= 0 ? 1 : 0;
   t.fallbacks += learned.chosen < 0 ? 1 : 0;
   if (learned.result.status != expert::PlanStatus::Converged) return;
   const double ratio = learned.result.objective / exact.objective;
@@ -64,7 +76,11 @@ json run_strategy_study(const StrategyStudyOptions& o) {
   if (o.count < 1) throw InputError("--count", "must be at least 1");
   if (o.model_dir.empty()) throw InputError("--model", "must name a model directory");
   o.config.validate();
-  const StrategyQpPlanner planner(o.config, learn::Model::load(o.model_dir).strategy());
+  // Open loop, as the data were made: the expert plans from the start with
+  // the config's own expert.monotone_lateral, not the closed loop's.
+  Config config = o.config;
+  config.closed_loop.monotone_lateral = false;
+  const StrategyQpPlanner planner(config, learn::Model::load(o.model_dir).strategy());
   const ScenarioSampler sampler(o.config, o.seed);
   Tally t;
   for (int i = 0; i < o.count; ++i) {
@@ -84,7 +100,9 @@ json run_strategy_study(const StrategyStudyOptions& o) {
           {"expert_plans", t.expert_plans},
           {"top1_feasible", double(t.top1) / plans},
           {"topk_feasible", double(t.topk) / plans},
+          {"topk_followed", double(t.followed) / plans},
           {"exact_fallbacks", t.fallbacks},
+          {"candidate_outcomes", t.candidate_outcomes},
           {"cost_ratio", summary(t.ratio)},
           {"cost_ratio_learned", summary(t.ratio_learned)},
           {"strategy_ms", summary(t.strategy_ms)},
@@ -111,8 +129,9 @@ std::string strategy_study_markdown(const json& s) {
     out += number(v.value("max", json()), "%.4f");
     out += " |\n";
   };
-  std::string out = "| scenes | expert plans | top-1 feasible | top-k feasible | exact fallbacks |";
-  out += " speedup (medians) |\n|---|---|---|---|---|---|\n| ";
+  std::string out = "| scenes | expert plans | top-1 feasible | top-k feasible |";
+  out +=
+      " top-k followed | exact fallbacks | speedup (medians) |\n|---|---|---|---|---|---|---|\n| ";
   out += std::to_string(s.at("scenes").get<long long>());
   out += " | ";
   out += std::to_string(s.at("expert_plans").get<long long>());
@@ -121,10 +140,20 @@ std::string strategy_study_markdown(const json& s) {
   out += " | ";
   out += number(100.0 * s.at("topk_feasible").get<double>(), "%.1f%%");
   out += " | ";
+  out += number(100.0 * s.at("topk_followed").get<double>(), "%.1f%%");
+  out += " | ";
   out += std::to_string(s.at("exact_fallbacks").get<long long>());
   out += " | ";
   out += number(s.at("speedup_of_medians"), "%.1f");
-  out += " |\n\n| measure | median | p95 | worst |\n|---|---|---|---|\n";
+  out += " |\n\nCandidates of the scenes with an expert plan:";
+  for (const auto& [what, n] : s.at("candidate_outcomes").items()) {
+    out += " ";
+    out += what;
+    out += " ";
+    out += std::to_string(n.get<long long>());
+    out += ";";
+  }
+  out += "\n\n| measure | median | p95 | worst |\n|---|---|---|---|\n";
   row(out, "cost / exact optimum (all expert plans)", s.at("cost_ratio"));
   row(out, "cost / exact optimum (learned strategy followed)", s.at("cost_ratio_learned"));
   row(out, "strategy-qp ms per plan", s.at("strategy_ms"));
