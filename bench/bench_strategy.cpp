@@ -75,6 +75,21 @@ void BM_StrategyQpPlan(benchmark::State& state) {
 }
 BENCHMARK(BM_StrategyQpPlan)->Iterations(300)->Unit(benchmark::kMillisecond);
 
+// The kNN vote alone: the learned part of a plan.
+void BM_StrategyPredict(benchmark::State& state) {
+  const auto model =
+      std::getenv("LANECHANGE_STRATEGY_MODEL") != nullptr
+          ? lc::learn::Model::load(std::getenv("LANECHANGE_STRATEGY_MODEL")).strategy()
+          : fitted_here();
+  std::size_t i = 0;
+  for (auto _ : state) {
+    auto r = model->predict(scenes()[i++ % scenes().size()], 5);
+    benchmark::DoNotOptimize(r);
+  }
+  state.counters["rows"] = model->rows();
+}
+BENCHMARK(BM_StrategyPredict)->Iterations(1000)->Unit(benchmark::kMicrosecond);
+
 void BM_ExactPlan(benchmark::State& state) {
   const auto& p = planner();
   std::size_t i = 0;

@@ -152,6 +152,7 @@ StrategyModel StrategyModel::fit(const StrategyRows& rows, const StrategySetting
   }
   m.standardizer_ = Standardizer::fit(x);
   m.points_ = m.standardizer_.apply(x).transpose();
+  m.norms_ = m.points_.colwise().squaredNorm().transpose();
   std::map<Strategy, int> index;
   for (const Strategy& s : labels) {
     const auto [it, fresh] = index.emplace(s, static_cast<int>(m.strategies_.size()));
@@ -170,12 +171,17 @@ std::vector<Strategy> StrategyModel::predict(const Eigen::VectorXd& features, in
     throw InputError("", what);
   }
   const Eigen::VectorXd q = (features - standardizer_.mean).cwiseQuotient(standardizer_.scale);
-  const Eigen::VectorXd d2 = (points_.colwise() - q).colwise().squaredNorm().transpose();
+  // |p - q|^2 = |p|^2 - 2 p'q + |q|^2: one matrix-vector product over the
+  // rows instead of a temporary as large as the table.
+  const Eigen::VectorXd d2 =
+      ((norms_ - 2.0 * (points_.transpose() * q)).array() + q.squaredNorm()).max(0.0).matrix();
   std::vector<int> order(static_cast<std::size_t>(d2.size()));
   for (std::size_t i = 0; i < order.size(); ++i) order[i] = static_cast<int>(i);
   const auto k = std::min<std::size_t>(static_cast<std::size_t>(neighbors_), order.size());
-  std::partial_sort(order.begin(), order.begin() + static_cast<std::ptrdiff_t>(k), order.end(),
-                    [&d2](int a, int b) { return d2(a) < d2(b); });
+  const auto nearer = [&d2](int a, int b) { return d2(a) < d2(b); };
+  const auto kth = order.begin() + static_cast<std::ptrdiff_t>(k);
+  std::nth_element(order.begin(), kth, order.end(), nearer);
+  std::sort(order.begin(), kth, nearer);
   // Inverse-distance votes: a scene seen before (distance 0) decides alone.
   std::vector<std::pair<double, int>> votes;  // (weight, strategy)
   for (std::size_t i = 0; i < k; ++i) {
@@ -235,6 +241,7 @@ StrategyModel StrategyModel::from_json(const json& j) {
     }
   }
   m.points_ = Eigen::Map<const Eigen::MatrixXd>(points.data(), width, n);
+  m.norms_ = m.points_.colwise().squaredNorm().transpose();
   return m;
 }
 

@@ -71,6 +71,7 @@ class StrategyModel {
   int neighbors_ = 15;
   Standardizer standardizer_;
   Eigen::MatrixXd points_;  ///< standardized features, one column per row
+  Eigen::VectorXd norms_;   ///< squared norm of each column of points_
   std::vector<int> label_;  ///< index into strategies_, per column
   std::vector<Strategy> strategies_;
 };
