@@ -2,10 +2,13 @@
 
 #include <unistd.h>
 
+#include <fstream>
 #include <iostream>
 #include <sstream>
 
 #include "lanechange/baselines/baselines.hpp"
+#include "lanechange/error.hpp"
+#include "lanechange/planner/strategy_study.hpp"
 #include "lanechange/scenario.hpp"
 #include "lanechange/sim/evaluate.hpp"
 #include "lanechange/sim/simulator.hpp"
@@ -36,7 +39,8 @@ void add_simulate(CLI::App& app, ConfigSource config_source) {
   static std::string out_path = "-";
   cmd->add_option("--scenario", scenario_path, "Scenario JSON file")->required();
   cmd->add_option("--planner", planner_name, "Planner: " + planner_help());
-  cmd->add_option("--model", model_dir, "Model directory (lanechange train), for mlp-miqp");
+  cmd->add_option("--model", model_dir,
+                  "Model directory (lanechange train), for mlp-miqp and strategy-qp");
   cmd->add_option("--duration", duration,
                   "Seconds to simulate (default: the horizon plus closed_loop.settle_time)")
       ->check(CLI::PositiveNumber);
@@ -67,7 +71,8 @@ void add_evaluate(CLI::App& app, ConfigSource config_source) {
   cmd->add_option("--seed", o.seed, "Sampler seed")->required();
   cmd->add_option("--behavior", behavior, "constant_speed, constant_accel, idm or all");
   cmd->add_option("--planner", planners, "Planner names, comma-separated: " + planner_help());
-  cmd->add_option("--model", o.model_dir, "Model directory (lanechange train), for mlp-miqp");
+  cmd->add_option("--model", o.model_dir,
+                  "Model directory (lanechange train), for mlp-miqp and strategy-qp");
   cmd->add_option("--out", o.out_dir, "Output directory; rerun the command to resume")->required();
   cmd->add_option("--jobs", jobs, "Worker threads (default: all cores)")
       ->check(CLI::NonNegativeNumber);
@@ -97,6 +102,33 @@ void add_evaluate(CLI::App& app, ConfigSource config_source) {
                 << " shards were done already or belong to other ranks); see " << o.out_dir
                 << "/summary.csv\n";
     });
+  });
+}
+
+void add_strategy_study(CLI::App& app, ConfigSource config_source) {
+  auto* cmd = app.add_subcommand(
+      "strategy-study",
+      "strategy-qp against the exact expert on sampled scenes, open loop (docs/strategy.md)");
+  static planner::StrategyStudyOptions o;
+  static std::string behavior = "all";
+  static std::string out_path;
+  cmd->add_option("--model", o.model_dir, "Model directory (lanechange train)")->required();
+  cmd->add_option("--count", o.count, "How many sampled scenes")->check(CLI::PositiveNumber);
+  cmd->add_option("--seed", o.seed, "Sampler seed (one the training data did not use)");
+  cmd->add_option("--behavior", behavior, "constant_speed, constant_accel, idm or all");
+  cmd->add_option("--out", out_path, "Also write the numbers as JSON to this file");
+  cmd->callback([config_source] {
+    o.config = config_source();
+    o.behavior.reset();
+    if (behavior != "all") o.behavior = behavior_from_string(behavior, "--behavior");
+    o.progress = &std::cerr;
+    const nlohmann::json study = planner::run_strategy_study(o);
+    if (!out_path.empty()) {
+      std::ofstream out(out_path);
+      out << study.dump(2) << "\n";
+      if (!out) throw InputError("--out", out_path + " cannot be written");
+    }
+    std::cout << planner::strategy_study_markdown(study);
   });
 }
 

@@ -7,5 +7,6 @@ namespace lanechange::app {
 
 void add_simulate(CLI::App& app, ConfigSource config);
 void add_evaluate(CLI::App& app, ConfigSource config);
+void add_strategy_study(CLI::App& app, ConfigSource config);
 
 }  // namespace lanechange::app

@@ -253,6 +253,15 @@ struct LatticeSettings {
   double weight_longitudinal = 1.0;  ///< the longitudinal cost's weight in the sum
 };
 
+/// The learned-strategy planner (docs/strategy.md, "strategy-qp").
+struct StrategyQpSettings {
+  int candidates = 5;  ///< predicted strategies solved per plan (MLOPT's top k)
+  /// Follow the first converged, collision-free candidate in the model's
+  /// order (CoCo) instead of the cheapest of all (MLOPT): fewer QPs, maybe
+  /// a dearer plan.
+  bool first_feasible = false;
+};
+
 struct Config {
   std::string preset = "paper";
   double lane_width = 3.75;  ///< m
@@ -269,6 +278,7 @@ struct Config {
   MpcSettings mpc;
   DwaSettings dwa;
   LatticeSettings lattice;
+  StrategyQpSettings strategy_qp;
 
   [[nodiscard]] double dt() const { return expert.horizon / expert.steps; }
   /// Throws InputError when a value is non-finite or out of its physical range.

@@ -122,6 +122,7 @@ void Config::validate() const {
   validate_dwa(dwa);
   validate_lattice(lattice);
   validate_mpc(mpc);
+  require(strategy_qp.candidates >= 1, "strategy_qp.candidates", "must be at least 1");
 }
 
 namespace {

@@ -190,6 +190,12 @@ void visit_fields(V& v, S& s) requires std::same_as<std::remove_const_t<S>, Latt
 }
 
 template <class V, class S>
+void visit_fields(V& v, S& s) requires std::same_as<std::remove_const_t<S>, StrategyQpSettings> {
+  v("candidates", s.candidates);
+  v("first_feasible", s.first_feasible);
+}
+
+template <class V, class S>
 void visit_fields(V& v, S& s) requires std::same_as<std::remove_const_t<S>, Config> {
   v("preset", s.preset);
   v("lane_width", s.lane_width);
@@ -206,6 +212,7 @@ void visit_fields(V& v, S& s) requires std::same_as<std::remove_const_t<S>, Conf
   v("mpc", s.mpc);
   v("dwa", s.dwa);
   v("lattice", s.lattice);
+  v("strategy_qp", s.strategy_qp);
 }
 
 }  // namespace lanechange

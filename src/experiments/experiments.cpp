@@ -44,11 +44,11 @@ std::string behavior_name(Behavior b) { return std::string(to_string(b)); }
 
 // The planners whose plans depend on the expert's lane rule.
 bool uses_the_expert(const std::string& planner) {
-  return planner == "miqp" || planner == "mlp-miqp";
+  return planner == "miqp" || planner == "mlp-miqp" || planner == "strategy-qp";
 }
 
 std::vector<std::string> default_planners() {
-  std::vector<std::string> planners = {"mlp-miqp", "miqp"};
+  std::vector<std::string> planners = {"mlp-miqp", "miqp", "strategy-qp"};
   for (auto& name : baselines::baseline_names()) planners.push_back(std::move(name));
   planners.emplace_back("keep-lane");
   return planners;

@@ -12,26 +12,16 @@
 #include <cstdint>
 #include <utility>
 
-#include "lanechange/expert/lane_change_solver.hpp"
-#include "lanechange/expert/structured_qp.hpp"
+#include "expert/fast_solver_internal.hpp"
 
 namespace lanechange::expert {
 
+namespace detail {
+
 namespace {
 
-constexpr int kFree = -1;
-constexpr double kModeTolerance = 1e-6;    // m: a lane row may be this far off and still hold
+constexpr int kFree = kFreeMode;
 constexpr double kCoarseViolation = 1e-3;  // m: clearly broken even at a rough point
-
-struct FastWorkspace final : LaneChangeWorkspace {
-  StructuredQp base;  // dynamics, costs and bounds of the round
-  StructuredQp node;  // the base plus the lane rows of one search node
-  QpWorkspace qp_workspace;
-  std::vector<std::vector<int>> stack;  // mode assignments waiting to be solved
-  std::vector<Control> start_controls;
-  long iterations = 0;         // of the interior-point method, for the solution's statistics
-  unsigned needed_bounds = 0;  // state components whose bounds this round's QPs carry
-};
 
 void add_row(QpStage& stage, const Eigen::Vector4d& g_state, double d, bool soft) {
   QpRow row;
@@ -208,15 +198,6 @@ Iterate path_of(const QpWorkspace& qp_ws, int steps) {
   return path;
 }
 
-struct NodeOutcome {
-  bool feasible = false;
-  bool coarse = false;  // a point good enough to branch on, not a solution
-  bool numerical_failure = false;
-  int iterations = 0;
-  double objective = kInfinity;
-  Iterate path;
-};
-
 // The state components (bit i for component i) whose bounds the path breaks.
 unsigned broken_bounds(const LaneChangeQp& qp, const Iterate& path) {
   unsigned broken = 0;
@@ -264,13 +245,13 @@ NodeOutcome solve_node_with(const LaneChangeQp& qp, const std::vector<int>& mode
   return out;
 }
 
+}  // namespace
+
 // The node's QP, with the bounds of only those state components that this
 // round's solutions have broken so far: solved again, with more, while its
 // solution breaks one.
-// A node whose optimum is proven to be at least `cutoff` comes back infeasible.
-// With `coarse`, a node well below the cutoff may come back as a rough point.
 NodeOutcome solve_node(const LaneChangeQp& qp, const std::vector<int>& modes, FastWorkspace& ws,
-                       double cutoff = kInfinity, bool coarse = false) {
+                       double cutoff, bool coarse) {
   int iterations = 0;
   NodeOutcome out;
   for (;;) {
@@ -284,6 +265,40 @@ NodeOutcome solve_node(const LaneChangeQp& qp, const std::vector<int>& modes, Fa
   ws.iterations += iterations;
   return out;
 }
+
+FastWorkspace& workspace_for(const SolveHints& hints, std::unique_ptr<LaneChangeWorkspace>& owned) {
+  auto* ws = dynamic_cast<FastWorkspace*>(hints.workspace);
+  if (ws != nullptr) return *ws;
+  owned = std::make_unique<FastWorkspace>();
+  return static_cast<FastWorkspace&>(*owned);
+}
+
+bool initial_state_allowed(const LaneChangeQp& qp) {
+  if (qp.node_modes[0].empty()) return true;
+  bool holds = false;
+  for (const LaneMode& m : qp.node_modes[0])
+    holds = holds || mode_violation(m, qp.initial_state) <= kModeTolerance;
+  return holds;
+}
+
+void prepare_round(const LaneChangeQp& qp, const SolveHints& hints, FastWorkspace& ws) {
+  const int n = qp.steps;
+  ws.iterations = 0;
+  build_base(qp, ws.base);
+  ws.needed_bounds = 0;
+  ws.node = ws.base;
+  ws.start_controls.assign(n, Control::Zero());
+  if (hints.controls != nullptr && static_cast<int>(hints.controls->size()) == n) {
+    ws.start_controls = *hints.controls;
+  }
+  // Strictly inside the control bounds, which are the only hard rows.
+  const Control margin = 1e-3 * (qp.control_upper - qp.control_lower);
+  for (Control& u : ws.start_controls) {
+    u = u.cwiseMax(qp.control_lower + margin).cwiseMin(qp.control_upper - margin);
+  }
+}
+
+namespace {
 
 // The free node whose relaxed state violates all its modes the most, or -1.
 int branching_node(const LaneChangeQp& qp, const std::vector<int>& modes, const Iterate& path,
@@ -358,6 +373,10 @@ std::vector<int> rounded_modes(const LaneChangeQp& qp, const Iterate& path) {
 
 }  // namespace
 
+}  // namespace detail
+
+using namespace detail;  // NOLINT(google-build-using-namespace): this file's own helpers
+
 std::unique_ptr<LaneChangeWorkspace> FastLaneChangeSolver::make_workspace() const {
   return std::make_unique<FastWorkspace>();
 }
@@ -366,37 +385,17 @@ LaneChangeSolution FastLaneChangeSolver::solve(const LaneChangeQp& qp, const Miq
                                                const SolveHints& hints) const {
   const auto start = Clock::now();
   std::unique_ptr<LaneChangeWorkspace> owned;
-  auto* ws = dynamic_cast<FastWorkspace*>(hints.workspace);
-  if (ws == nullptr) {
-    owned = make_workspace();
-    ws = static_cast<FastWorkspace*>(owned.get());
-  }
+  FastWorkspace* ws = &workspace_for(hints, owned);
   LaneChangeSolution out;
   ws->iterations = 0;
   const int n = qp.steps;
   // The initial state is given: some mode of node 0 must already hold.
-  if (!qp.node_modes[0].empty()) {
-    bool holds = false;
-    for (const LaneMode& m : qp.node_modes[0])
-      holds = holds || mode_violation(m, qp.initial_state) <= kModeTolerance;
-    if (!holds) {
-      out.status = MiqpStatus::Infeasible;
-      out.message = "the initial state breaks the lane rules";
-      return out;
-    }
+  if (!initial_state_allowed(qp)) {
+    out.status = MiqpStatus::Infeasible;
+    out.message = "the initial state breaks the lane rules";
+    return out;
   }
-  build_base(qp, ws->base);
-  ws->needed_bounds = 0;
-  ws->node = ws->base;
-  ws->start_controls.assign(n, Control::Zero());
-  if (hints.controls != nullptr && static_cast<int>(hints.controls->size()) == n) {
-    ws->start_controls = *hints.controls;
-  }
-  // Strictly inside the control bounds, which are the only hard rows.
-  const Control margin = 1e-3 * (qp.control_upper - qp.control_lower);
-  for (Control& u : ws->start_controls) {
-    u = u.cwiseMax(qp.control_lower + margin).cwiseMin(qp.control_upper - margin);
-  }
+  prepare_round(qp, hints, *ws);
   double incumbent = kInfinity;
   auto accept = [&](NodeOutcome& o) {
     if (o.objective < incumbent) {

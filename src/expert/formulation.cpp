@@ -110,6 +110,15 @@ double terminal_aim(const Scenario& s, const Config& c, const TrafficPrediction&
 
 }  // namespace
 
+int lane_mode_index(LaneRule rule, LaneOccupancy occupancy) {
+  // The order in which lane_modes lists them.
+  if (rule == LaneRule::EitherOr) {
+    if (occupancy == LaneOccupancy::BothLanes) return -1;
+    return occupancy == LaneOccupancy::EgoLane ? 0 : 1;
+  }
+  return static_cast<int>(occupancy);
+}
+
 LaneChangeQp build_lane_change_qp(const Scenario& s, const Config& config, const Iterate& point,
                                   const TrafficPrediction& prediction) {
   const ExpertSettings& e = config.expert;

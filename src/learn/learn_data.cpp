@@ -99,9 +99,19 @@ struct Rows {
   }
 };
 
+// The lane mode column: empty at k = 0, where no lane rule applies.
+int lane_mode_of(const CsvFile& csv, std::string_view field) {
+  if (field.empty()) return -1;
+  const double mode = csv.number(field);
+  if (mode != 0.0 && mode != 1.0 && mode != 2.0) {
+    throw InputError("", csv.path() + " holds a lane_mode other than 0, 1 or 2");
+  }
+  return static_cast<int>(mode);
+}
+
 struct Loader {
   LearningData& data;
-  Rows features, inputs, targets;
+  Rows features, inputs, targets, plan_states;
   // Per data set: scenario index -> row of the scenario table.
   std::vector<int> row_of_index;
 
@@ -130,18 +140,27 @@ struct Loader {
     CsvFile csv(path);
     const auto in_cols = csv.columns(data.action_inputs);
     const auto out_cols = csv.columns(data.action_targets);
-    const std::size_t c_index = csv.column("index"), c_label = csv.column("label");
+    const auto node_cols = csv.columns(PlanNodeTable::columns());
+    const std::size_t c_index = csv.column("index"), c_label = csv.column("label"),
+                      c_k = csv.column("k"), c_mode = csv.column("lane_mode");
     std::vector<std::string_view> f;
     while (csv.next(f)) {
-      if (f[c_label] != kLabelNames[kWellPosed]) continue;
+      if (f[c_label] == kLabelNames[kFailure]) continue;
       const auto index = static_cast<long long>(csv.number(f[c_index]));
       if (index < 0 || index >= static_cast<long long>(row_of_index.size()) ||
           row_of_index[static_cast<std::size_t>(index)] < 0) {
         throw InputError("", path + " holds a sample of an unknown scenario");
       }
+      const int scenario = row_of_index[static_cast<std::size_t>(index)];
+      PlanNodeTable& nodes = data.plan_nodes;
+      for (std::size_t c : node_cols) plan_states.values.push_back(csv.number(f[c]));
+      nodes.lane_mode.push_back(lane_mode_of(csv, f[c_mode]));
+      nodes.node.push_back(static_cast<int>(csv.number(f[c_k])));
+      nodes.scenario.push_back(scenario);
+      if (f[c_label] != kLabelNames[kWellPosed]) continue;
       for (std::size_t c : in_cols) inputs.values.push_back(csv.number(f[c]));
       for (std::size_t c : out_cols) targets.values.push_back(csv.number(f[c]));
-      data.samples.scenario.push_back(row_of_index[static_cast<std::size_t>(index)]);
+      data.samples.scenario.push_back(scenario);
     }
   }
 
@@ -188,7 +207,7 @@ void adopt_or_compare(LearningData& data, const json& manifest, const std::strin
 LearningData load_learning_data(const std::vector<std::string>& dirs) {
   if (dirs.empty()) throw InputError("--data", "at least one data set is needed");
   LearningData data;
-  Loader loader{data, {}, {}, {}, {}};
+  Loader loader{data, {}, {}, {}, {}, {}};
   for (const std::string& dir : dirs) {
     const data::DatasetSummary summary = data::summarize_dataset(dir);  // checks checksums
     const json manifest = data::detail::read_manifest(dir);
@@ -197,6 +216,7 @@ LearningData load_learning_data(const std::vector<std::string>& dirs) {
       loader.features.width = data.classifier_features.size();
       loader.inputs.width = data.action_inputs.size();
       loader.targets.width = data.action_targets.size();
+      loader.plan_states.width = PlanNodeTable::columns().size();
       loader.read_dataset(dir, manifest, static_cast<int>(data.datasets.size()));
     } catch (const json::exception& e) {
       throw InputError("", dir + "/manifest.json is malformed (" + e.what() + ")");
@@ -208,7 +228,16 @@ LearningData load_learning_data(const std::vector<std::string>& dirs) {
   data.scenarios.features = loader.features.matrix();
   data.samples.inputs = loader.inputs.matrix();
   data.samples.targets = loader.targets.matrix();
+  data.plan_nodes.states = loader.plan_states.matrix();
   return data;
+}
+
+const std::vector<std::string>& PlanNodeTable::columns() {
+  static const std::vector<std::string> names = {
+      "t",          "ego_a0",   "x",        "y",        "v",          "theta",
+      "a",          "leader_x", "leader_v", "leader_a", "follower_x", "follower_v",
+      "follower_a", "target_x", "target_v", "target_a"};
+  return names;
 }
 
 Split split_scenarios(int n, double test_share, std::uint64_t seed) {

@@ -51,6 +51,7 @@ Model Model::load(const std::string& dir, const ModelRequirements& requirements)
   if (!fs::exists(path))
     throw InputError("", dir + " holds no model (" + std::string(kModelFile) + ")");
   Model m;
+  m.dir_ = dir;
   m.description_ = lanechange::detail::read_json_file(path);
   const json& d = m.description_;
   try {
@@ -73,10 +74,26 @@ Model Model::load(const std::string& dir, const ModelRequirements& requirements)
         (fs::path(dir) / d.at("network").at("policy").get<std::string>()).string());
     m.policy_ = std::make_shared<const Policy>(PolicyWeights::from_json(policy));
     m.metrics_ = lanechange::detail::read_json_file((fs::path(dir) / "metrics.json").string());
+    if (d.contains("strategy")) {
+      const std::string file = d.at("strategy").at("file").get<std::string>();
+      m.strategy_ = std::make_shared<const StrategyModel>(StrategyModel::from_json(
+          lanechange::detail::read_json_file((fs::path(dir) / file).string())));
+    }
   } catch (const json::exception& e) {
     throw InputError("", path + " is malformed (" + e.what() + ")");
   }
   return m;
+}
+
+std::shared_ptr<const StrategyModel> Model::strategy() const {
+  if (!strategy_) {
+    std::string what = dir_;
+    what += " holds no lane-strategy model (";
+    what += kStrategyFile;
+    what += "): it was trained before strategy-qp; run lanechange train again";
+    throw InputError("--model", what);
+  }
+  return strategy_;
 }
 
 std::vector<int> Model::classify(ClassifierKind kind, FeatureSet set,

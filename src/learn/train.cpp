@@ -257,6 +257,40 @@ void train_action_network(Context& c) {
         m["test_rmse"].begin()->dump() + ", omega " + (++m["test_rmse"].begin())->dump());
 }
 
+// The strategy model, and the share of test plans whose strategy (from
+// their start) is its first guess and among its first five: how often the
+// exact integer part is recovered, a lower bound on how often a feasible
+// one is (docs/strategy.md measures that).
+void train_strategy(Context& c) {
+  const auto start = Clock::now();
+  const StrategyModel model = StrategyModel::fit(
+      strategy_rows(c.data, c.split.train, c.options.strategy.node_stride), c.options.strategy);
+  const StrategyRows test = strategy_rows(c.data, c.split.test, 0);
+  long long top1 = 0, top5 = 0;
+  for (std::size_t i = 0; i < test.labels.size(); ++i) {
+    const std::vector<Strategy> guess = model.predict(test.features[i], 5);
+    top1 += !guess.empty() && guess.front() == test.labels[i] ? 1 : 0;
+    top5 += std::find(guess.begin(), guess.end(), test.labels[i]) != guess.end() ? 1 : 0;
+  }
+  const double n = double(std::max<std::size_t>(test.labels.size(), 1));
+  lanechange::detail::write_file_atomically((c.dir / std::string(kStrategyFile)).string(),
+                                            model.to_json().dump());
+  c.model["strategy"] = {{"file", kStrategyFile}};
+  c.metrics["strategy"] = {
+      {"train_rows", model.rows()},          {"distinct_strategies", model.strategies()},
+      {"test_plans", test.labels.size()},    {"test_exact_top1", double(top1) / n},
+      {"test_exact_top5", double(top5) / n}, {"train_s", seconds_since(start)}};
+  std::string line = "strategy model: ";
+  line += std::to_string(model.rows());
+  line += " rows, ";
+  line += std::to_string(model.strategies());
+  line += " strategies; a test plan's own strategy first in ";
+  line += std::to_string(double(top1) / n);
+  line += ", in the top 5 in ";
+  line += std::to_string(double(top5) / n);
+  c.say(line);
+}
+
 json describe_data(const Context& c) {
   const int n = c.data.scenarios.rows();
   json split = json::array();
@@ -321,7 +355,8 @@ json TrainOptions::config() const {
             {"patience", network.patience},
             {"batch_size", network.batch_size},
             {"learning_rate", network.learning_rate},
-            {"validation_share", network.validation_share}}}};
+            {"validation_share", network.validation_share}}},
+          {"strategy", {{"neighbors", strategy.neighbors}, {"node_stride", strategy.node_stride}}}};
 }
 
 TrainReport train_models(const TrainOptions& options) {
@@ -352,6 +387,7 @@ TrainReport train_models(const TrainOptions& options) {
     train_classifier_set(c, FeatureSet::Plain);
     train_classifier_set(c, FeatureSet::WithBehavior);
     train_action_network(c);
+    train_strategy(c);
     c.metrics["wall_s"] = seconds_since(start);
     write_description(c);
     publish(staging, out);

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <utility>
 
 namespace lanechange::planner {
 
@@ -65,7 +66,13 @@ Scenario scene_now(const Observation& o, const Config& config) {
 }
 
 MiqpSession::MiqpSession(const expert::ExpertPlanner& expert, const Config& config)
-    : expert_(expert), config_(config), keeper_(config) {}
+    : MiqpSession(
+          [&expert](const Scenario& scene, const expert::PlanLimits& limits,
+                    const expert::PlanHints& hints) { return expert.plan(scene, limits, hints); },
+          config) {}
+
+MiqpSession::MiqpSession(PlanFunction plan, const Config& config)
+    : plan_function_(std::move(plan)), config_(config), keeper_(config) {}
 
 Decision MiqpSession::act(const Observation& o) {
   const bool due = !plan_ || o.step - plan_step_ >= config_.closed_loop.replan_period;
@@ -96,7 +103,7 @@ std::string MiqpSession::replan(const Observation& o) {
     hints = {&guess, &modes};
   }
   const ExpertResult result =
-      expert_.plan(scene, {config_.closed_loop.step_budget_ms / 1000.0}, hints);
+      plan_function_(scene, {config_.closed_loop.step_budget_ms / 1000.0}, hints);
   last_plan_ms_ = result.total_ms;
   if (result.status != PlanStatus::Converged) {
     return std::string(expert::to_string(result.status)) + ": " + result.reason;

@@ -1,6 +1,7 @@
 #pragma once
 // The planners' internals, shared by the planners of src/planner/ (and the
 // hierarchical planner's take-over, which is this session).
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -14,9 +15,18 @@ namespace lanechange::planner {
 /// states of every car, and the horizon the config's mode asks for.
 [[nodiscard]] Scenario scene_now(const Observation& observation, const Config& config);
 
+/// Where a re-planning session gets its plans: the exact expert, or
+/// predicted strategies finished by QPs. Called with the scene now, the
+/// step's time limit and the last plan shifted to now as hints.
+using PlanFunction = std::function<expert::ExpertResult(const Scenario&, const expert::PlanLimits&,
+                                                        const expert::PlanHints&)>;
+
+/// Re-plans every replan_period steps and follows the plan: the exact
+/// expert's way in closed loop, shared by every planner that re-plans.
 class MiqpSession final : public PlannerSession {
  public:
   MiqpSession(const expert::ExpertPlanner& expert, const Config& config);
+  MiqpSession(PlanFunction plan, const Config& config);
   [[nodiscard]] Decision act(const Observation& observation) override;
   /// Time of the last re-plan (ms), for benchmarks.
   [[nodiscard]] double last_plan_ms() const { return last_plan_ms_; }
@@ -26,7 +36,7 @@ class MiqpSession final : public PlannerSession {
   std::string replan(const Observation& observation);
   [[nodiscard]] Decision fallback(const Observation& observation, const std::string& why);
 
-  const expert::ExpertPlanner& expert_;
+  PlanFunction plan_function_;
   const Config& config_;
   LaneKeeper keeper_;
   std::optional<expert::Iterate> plan_;

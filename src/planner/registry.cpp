@@ -2,6 +2,7 @@
 
 #include "lanechange/error.hpp"
 #include "planner/mlp_miqp_planner.hpp"
+#include "planner/strategy_qp_planner.hpp"
 
 namespace lanechange::planner {
 
@@ -35,7 +36,9 @@ class KeepLanePlanner final : public ClosedLoopPlanner {
 
 }  // namespace
 
-std::vector<std::string> planner_names() { return {"miqp", "mlp-miqp", "keep-lane"}; }
+std::vector<std::string> planner_names() {
+  return {"miqp", "mlp-miqp", "strategy-qp", "keep-lane"};
+}
 
 std::shared_ptr<const ClosedLoopPlanner> make_planner(std::string_view name, const Config& config,
                                                       const std::string& model_dir) {
@@ -48,6 +51,12 @@ std::shared_ptr<const ClosedLoopPlanner> make_planner(std::string_view name, con
     auto model = std::make_shared<const learn::Model>(learn::Model::load(model_dir));
     return std::make_shared<MlpMiqpPlanner>(config, std::move(model),
                                             std::make_shared<expert::FastLaneChangeSolver>());
+  }
+  if (name == "strategy-qp") {
+    if (model_dir.empty()) {
+      throw InputError("--model", "strategy-qp needs a model directory (lanechange train)");
+    }
+    return std::make_shared<StrategyQpPlanner>(config, learn::Model::load(model_dir).strategy());
   }
   if (name == "miqp") {
     return std::make_shared<MiqpPlanner>(config, std::make_shared<expert::FastLaneChangeSolver>());

@@ -10,6 +10,8 @@
 #include "lanechange/learn/learn_data.hpp"
 #include "lanechange/learn/model.hpp"
 #include "lanechange/learn/train.hpp"
+#include "lanechange/planner/planner.hpp"
+#include "lanechange/sampler.hpp"
 
 namespace lanechange::learn {
 namespace {
@@ -128,6 +130,52 @@ TEST_F(Trained, ReloadedModelGivesTheSamePredictions) {
   }
   EXPECT_NEAR(std::sqrt(sum / static_cast<double>(samples.size())),
               m.at("network").at("test_rmse").at("a").get<double>(), 1e-9);
+}
+
+TEST_F(Trained, StrategyModelIsSavedWithAChecksumAndLoadsBack) {
+  const json m = json::parse(testing::read_text(model_dir() + "/metrics.json"));
+  const json& s = m.at("strategy");
+  EXPECT_GT(s.at("train_rows").get<int>(), 0);
+  EXPECT_GT(s.at("distinct_strategies").get<int>(), 0);
+  EXPECT_GE(s.at("test_exact_top5").get<double>(), s.at("test_exact_top1").get<double>());
+  const json d = json::parse(testing::read_text(model_dir() + "/model.json"));
+  EXPECT_TRUE(d.at("files").contains(std::string(kStrategyFile)));
+  const Model model = Model::load(model_dir());
+  const auto strategy = model.strategy();
+  const StrategyModel again = StrategyModel::from_json(
+      json::parse(testing::read_text(model_dir() + "/" + std::string(kStrategyFile))));
+  const Scenario scene = ScenarioSampler(Config{}, 3).sample(0);
+  EXPECT_EQ(strategy->predict(scene, 5), again.predict(scene, 5));
+  EXPECT_FALSE(strategy->predict(scene, 5).empty());
+  EXPECT_NO_THROW((void)planner::make_planner("strategy-qp", Config{}, model_dir()));
+
+  const fs::path copy = root_ / "strategy_damaged";
+  fs::remove_all(copy);
+  fs::copy(model_dir(), copy, fs::copy_options::recursive);
+  testing::write_text((copy / std::string(kStrategyFile)).string(), again.to_json().dump(1));
+  EXPECT_THROW((void)Model::load(copy.string()), InputError);
+}
+
+// A model trained before strategy-qp still serves mlp-miqp; only strategy-qp
+// is refused, and says why.
+TEST_F(Trained, AModelWithoutAStrategyServesMlpMiqpOnly) {
+  const fs::path copy = root_ / "no_strategy";
+  fs::remove_all(copy);
+  fs::copy(model_dir(), copy, fs::copy_options::recursive);
+  fs::remove(copy / std::string(kStrategyFile));
+  json d = json::parse(testing::read_text((copy / "model.json").string()));
+  d.erase("strategy");
+  d["files"].erase(std::string(kStrategyFile));
+  testing::write_text((copy / "model.json").string(), d.dump());
+  EXPECT_NO_THROW((void)Model::load(copy.string()));
+  EXPECT_NO_THROW((void)planner::make_planner("mlp-miqp", Config{}, copy.string()));
+  try {
+    (void)planner::make_planner("strategy-qp", Config{}, copy.string());
+    ADD_FAILURE() << "strategy-qp was built without a strategy model";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("lane-strategy model"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW((void)planner::make_planner("strategy-qp", Config{}, ""), InputError);
 }
 
 TEST_F(Trained, DamagedOrForeignModelsAreRefused) {

@@ -85,6 +85,11 @@ struct LaneChangeQp {
   [[nodiscard]] int best_mode(const Iterate& path, int node) const;
 };
 
+/// Where a lane rule puts `occupancy` among a node's modes (the index
+/// LaneChangeSolution::modes uses), or -1 when the rule has no such mode
+/// (either_or has no both-lanes mode).
+[[nodiscard]] int lane_mode_index(LaneRule rule, LaneOccupancy occupancy);
+
 /// The other cars' positions the lane rows use, node by node.
 struct LaneReferences {
   std::vector<double> leader_x, follower_x, target_x;

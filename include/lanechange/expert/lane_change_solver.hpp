@@ -76,6 +76,21 @@ class FastLaneChangeSolver final : public LaneChangeSolver {
                                          const SolveHints& hints = {}) const override;
 };
 
+/// No search: the one structured QP of the lane modes in SolveHints::modes
+/// (one index per node, as LaneChangeSolution::modes; -1 where no lane rule
+/// applies). The convex part of the MIQP once its integer part is fixed, as
+/// CoCo and MLOPT solve a predicted strategy (docs/strategy.md). Infeasible
+/// when the modes are missing, do not fit the problem, or leave no point; the
+/// solution's modes are the given ones, so the next round keeps them.
+/// Shares FastLaneChangeSolver's workspace type.
+class FixedModeLaneChangeSolver final : public LaneChangeSolver {
+ public:
+  [[nodiscard]] std::string_view name() const override { return "fixed-mode"; }
+  [[nodiscard]] std::unique_ptr<LaneChangeWorkspace> make_workspace() const override;
+  [[nodiscard]] LaneChangeSolution solve(const LaneChangeQp& qp, const MiqpSettings& settings,
+                                         const SolveHints& hints = {}) const override;
+};
+
 /// The solver named `name`: "fast" or "reference".
 [[nodiscard]] std::shared_ptr<const LaneChangeSolver> make_lane_change_solver(std::string_view name,
                                                                               double big_m);

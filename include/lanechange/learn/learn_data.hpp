@@ -19,6 +19,7 @@ inline constexpr int kClasses = 3;
 inline constexpr std::array<std::string_view, kClasses> kLabelNames = {"well_posed", "ill_posed",
                                                                        "failure"};
 inline constexpr int kWellPosed = 0;
+inline constexpr int kFailure = 2;
 inline constexpr int kBehaviors = 3;
 /// The order of the optional behavior one-hot input.
 inline constexpr std::array<std::string_view, kBehaviors> kBehaviorNames = {
@@ -50,6 +51,19 @@ struct SampleTable {
   [[nodiscard]] int rows() const { return static_cast<int>(scenario.size()); }
 };
 
+/// Every node of the converged, collision-free plans (well-posed and
+/// ill-posed): the states of the ego and the cars there, and the plan's lane
+/// mode, for the strategy model (docs/strategy.md).
+struct PlanNodeTable {
+  /// The columns of `states`, by their data-set names.
+  static const std::vector<std::string>& columns();
+  Eigen::MatrixXd states;      ///< rows x columns()
+  std::vector<int> lane_mode;  ///< LaneOccupancy's value; -1 at k = 0
+  std::vector<int> node;       ///< k
+  std::vector<int> scenario;   ///< row of ScenarioTable the node belongs to
+  [[nodiscard]] int rows() const { return static_cast<int>(scenario.size()); }
+};
+
 struct LearningData {
   std::vector<DatasetIdentity> datasets;
   std::vector<std::string> classifier_features;
@@ -59,6 +73,7 @@ struct LearningData {
   nlohmann::json config;  ///< the expert config all data sets share
   ScenarioTable scenarios;
   SampleTable samples;
+  PlanNodeTable plan_nodes;
 };
 
 /// Reads and checks (row counts, checksums: summarize_dataset) the data sets.

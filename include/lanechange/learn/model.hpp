@@ -15,6 +15,7 @@
 
 #include "lanechange/learn/classifier.hpp"
 #include "lanechange/learn/policy.hpp"
+#include "lanechange/learn/strategy.hpp"
 
 namespace lanechange::learn {
 
@@ -44,6 +45,9 @@ class Model {
   [[nodiscard]] std::vector<int> classify(ClassifierKind kind, FeatureSet set,
                                           const Eigen::MatrixXd& raw) const;
   [[nodiscard]] const Policy& policy() const { return *policy_; }
+  /// The lane-strategy model (strategy.json). Models trained before it
+  /// existed load without one: InputError only when it is asked for.
+  [[nodiscard]] std::shared_ptr<const StrategyModel> strategy() const;
   [[nodiscard]] const nlohmann::json& description() const { return description_; }
   /// metrics.json as written by train_models.
   [[nodiscard]] const nlohmann::json& metrics() const { return metrics_; }
@@ -54,6 +58,8 @@ class Model {
   std::map<std::pair<FeatureSet, ClassifierKind>, std::unique_ptr<Classifier>> classifiers_;
   std::map<FeatureSet, Standardizer> standardizers_;
   std::shared_ptr<const Policy> policy_;
+  std::shared_ptr<const StrategyModel> strategy_;
+  std::string dir_;
 };
 
 }  // namespace lanechange::learn

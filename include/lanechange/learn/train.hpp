@@ -10,6 +10,7 @@
 
 #include "lanechange/learn/classifier.hpp"
 #include "lanechange/learn/network.hpp"
+#include "lanechange/learn/strategy.hpp"
 
 namespace lanechange::learn {
 
@@ -21,7 +22,8 @@ struct TrainOptions {
   int jobs = 0;             ///< threads for cross-validation; 0: one per core
   SearchSettings search;
   NetworkSettings network;  ///< its seed is derived from `seed`
-  bool plots = true;        ///< PNGs (needs gnuplot)
+  StrategySettings strategy;
+  bool plots = true;  ///< PNGs (needs gnuplot)
   std::ostream* progress = nullptr;
   /// The settings that shape the models (recorded in model.json).
   [[nodiscard]] nlohmann::json config() const;

@@ -100,7 +100,8 @@ bool clip_to_limits(EgoControl& control, const EgoState& ego, const Limits& limi
 /// The planners by name: "miqp" (the exact expert, re-planning), "mlp-miqp", and the fallback
 /// (the lane keeper alone: never changes lanes; named "keep-lane"). Throws InputError for an
 /// unknown name.
-/// "mlp-miqp" (Algorithm 1) loads its models from `model_dir`.
+/// "mlp-miqp" (Algorithm 1) and "strategy-qp" (docs/strategy.md) load their models from
+/// `model_dir`.
 [[nodiscard]] std::shared_ptr<const ClosedLoopPlanner> make_planner(
     std::string_view name, const Config& config, const std::string& model_dir = "");
 [[nodiscard]] std::vector<std::string> planner_names();

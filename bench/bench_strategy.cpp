@@ -1,0 +1,117 @@
+// strategy-qp's time per plan (predict the top-k strategies, one QP per
+// round for each) against the exact expert's, open loop, on the same
+// held-out sampled scenes. The strategy model comes from the model directory
+// in LANECHANGE_STRATEGY_MODEL (lanechange train), or else is fitted here on
+// the exact plans of scenes drawn with another seed (their starts only).
+#include <benchmark/benchmark.h>
+#include <unistd.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+#include <vector>
+
+#include "lanechange/learn/model.hpp"
+#include "lanechange/sampler.hpp"
+#include "planner/strategy_qp_planner.hpp"
+
+namespace lc = lanechange;
+
+namespace {
+
+constexpr std::uint64_t kTrainSeed = 2025;
+constexpr std::uint64_t kTestSeed = 2026;
+
+int env_int(const char* name, int fallback) {
+  const char* v = std::getenv(name);
+  return v != nullptr ? std::atoi(v) : fallback;
+}
+
+std::vector<lc::Scenario> sample(std::uint64_t seed, int count) {
+  const lc::ScenarioSampler sampler(lc::Config{}, seed);
+  std::vector<lc::Scenario> out;
+  for (int i = 0; i < count; ++i) out.push_back(sampler.sample(static_cast<std::uint64_t>(i)));
+  return out;
+}
+
+std::shared_ptr<const lc::learn::StrategyModel> fitted_here() {
+  const lc::expert::ExpertPlanner exact(lc::planner::closed_loop_expert(lc::Config{}),
+                                        std::make_shared<lc::expert::FastLaneChangeSolver>());
+  lc::learn::StrategyRows rows;
+  for (const lc::Scenario& s : sample(kTrainSeed, env_int("LANECHANGE_BENCH_TRAIN", 300))) {
+    const lc::expert::ExpertResult r = exact.plan(s);
+    if (r.status != lc::expert::PlanStatus::Converged) continue;
+    std::vector<int> modes;
+    for (const auto& o : r.occupancy) modes.push_back(o ? static_cast<int>(*o) : -1);
+    rows.features.push_back(lc::learn::strategy_features(s));
+    rows.labels.push_back(lc::learn::strategy_of(modes));
+  }
+  return std::make_shared<const lc::learn::StrategyModel>(
+      lc::learn::StrategyModel::fit(rows, lc::learn::StrategySettings{}));
+}
+
+const lc::planner::StrategyQpPlanner& planner() {
+  static const lc::planner::StrategyQpPlanner p = [] {
+    const char* dir = std::getenv("LANECHANGE_STRATEGY_MODEL");
+    auto model = dir != nullptr ? lc::learn::Model::load(dir).strategy() : fitted_here();
+    return lc::planner::StrategyQpPlanner(lc::Config{}, std::move(model));
+  }();
+  return p;
+}
+
+const std::vector<lc::Scenario>& scenes() {
+  static const std::vector<lc::Scenario> all =
+      sample(kTestSeed, env_int("LANECHANGE_BENCH_SCENARIOS", 100));
+  return all;
+}
+
+void BM_StrategyQpPlan(benchmark::State& state) {
+  const auto& p = planner();
+  std::size_t i = 0;
+  for (auto _ : state) {
+    auto r = p.plan(scenes()[i++ % scenes().size()]);
+    benchmark::DoNotOptimize(r);
+  }
+}
+BENCHMARK(BM_StrategyQpPlan)->Iterations(300)->Unit(benchmark::kMillisecond);
+
+// The kNN vote alone: the learned part of a plan.
+void BM_StrategyPredict(benchmark::State& state) {
+  const auto model =
+      std::getenv("LANECHANGE_STRATEGY_MODEL") != nullptr
+          ? lc::learn::Model::load(std::getenv("LANECHANGE_STRATEGY_MODEL")).strategy()
+          : fitted_here();
+  std::size_t i = 0;
+  for (auto _ : state) {
+    auto r = model->predict(scenes()[i++ % scenes().size()], 5);
+    benchmark::DoNotOptimize(r);
+  }
+  state.counters["rows"] = model->rows();
+}
+BENCHMARK(BM_StrategyPredict)->Iterations(1000)->Unit(benchmark::kMicrosecond);
+
+void BM_ExactPlan(benchmark::State& state) {
+  const auto& p = planner();
+  std::size_t i = 0;
+  for (auto _ : state) {
+    auto r = p.exact().plan(scenes()[i++ % scenes().size()]);
+    benchmark::DoNotOptimize(r);
+  }
+}
+BENCHMARK(BM_ExactPlan)->Iterations(300)->Unit(benchmark::kMillisecond);
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  benchmark::Initialize(&argc, argv);
+  (void)planner();  // the model's fit is setup, not a plan
+  benchmark::RunSpecifiedBenchmarks();
+  char host[256] = "?";
+  (void)gethostname(host, sizeof host);
+  std::printf("== strategy benchmark ==\ntest seed %llu, %zu scenes (N = 50), host %s, model %s\n",
+              static_cast<unsigned long long>(kTestSeed), scenes().size(), host,
+              std::getenv("LANECHANGE_STRATEGY_MODEL") != nullptr ? "from the model directory"
+                                                                  : "fitted on exact plans here");
+  benchmark::Shutdown();
+  return 0;
+}

@@ -1,0 +1,83 @@
+#pragma once
+// The learned integer part of a plan (docs/strategy.md): a plan's lane
+// strategy is its lane occupancy at every node after the first, and a
+// k-nearest-neighbour vote over standardized scene features ranks the
+// strategies of the nearest training scenes, CoCo-style: a classifier over
+// the strategies seen in the data. The rows are the plans' starts and, for
+// the closed loop, their later nodes as scenes of their own with the rest of
+// the plan's strategy (a plan from there would keep it, up to re-linearizing).
+#include <Eigen/Dense>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "lanechange/learn/classifier.hpp"
+#include "lanechange/scenario.hpp"
+
+namespace lanechange::learn {
+
+struct LearningData;
+
+inline constexpr std::string_view kStrategyFormat = "lanechange.strategy/1";
+inline constexpr std::string_view kStrategyFile = "strategy.json";
+
+/// The lane occupancy of nodes 1..L of a plan, one character each: '0' ego
+/// lane, '1' both lanes, '2' target lane (LaneOccupancy's values, as the
+/// data sets' lane_mode column). Applied to a horizon of another length, its
+/// last node repeats or its tail is cut.
+using Strategy = std::string;
+
+struct StrategySettings {
+  int neighbors = 15;   ///< rows that vote
+  int node_stride = 5;  ///< a closed-loop row every this many nodes of a plan (0: starts only)
+};
+
+/// The features of a scene, in strategy_feature_names() order: the ego's
+/// lateral state, speed and acceleration, each car's gap to the ego, speed
+/// and acceleration, the horizon and the behavior one-hot. Relative gaps make
+/// a scene mid-manoeuvre look like a start.
+[[nodiscard]] const std::vector<std::string>& strategy_feature_names();
+[[nodiscard]] Eigen::VectorXd strategy_features(const Scenario& scene);
+
+/// Training rows: scenes and the strategy their plan follows from there.
+struct StrategyRows {
+  std::vector<Eigen::VectorXd> features;
+  std::vector<Strategy> labels;
+};
+
+/// The rows of the converged plans of `scenarios` (rows of ScenarioTable):
+/// each plan's start, and every `node_stride`-th node after it (0: starts only).
+[[nodiscard]] StrategyRows strategy_rows(const LearningData& data,
+                                         const std::vector<int>& scenarios, int node_stride);
+
+class StrategyModel {
+ public:
+  /// InputError when there are no rows.
+  static StrategyModel fit(const StrategyRows& rows, const StrategySettings& settings);
+  static StrategyModel from_json(const nlohmann::json& j);
+  [[nodiscard]] nlohmann::json to_json() const;
+
+  /// Up to `count` distinct strategies, most likely first (the neighbours'
+  /// inverse-distance vote).
+  [[nodiscard]] std::vector<Strategy> predict(const Eigen::VectorXd& features, int count) const;
+  [[nodiscard]] std::vector<Strategy> predict(const Scenario& scene, int count) const {
+    return predict(strategy_features(scene), count);
+  }
+  [[nodiscard]] int rows() const { return static_cast<int>(label_.size()); }
+  [[nodiscard]] int strategies() const { return static_cast<int>(strategies_.size()); }
+
+ private:
+  int neighbors_ = 15;
+  Standardizer standardizer_;
+  Eigen::MatrixXd points_;  ///< standardized features, one column per row
+  Eigen::VectorXd norms_;   ///< squared norm of each column of points_
+  std::vector<int> label_;  ///< index into strategies_, per column
+  std::vector<Strategy> strategies_;
+};
+
+/// The strategy of a plan's lane modes (LaneOccupancy values per node, -1
+/// where none applies) from node `from` on. InputError for a node without one.
+[[nodiscard]] Strategy strategy_of(const std::vector<int>& lane_modes, int from = 0);
+
+}  // namespace lanechange::learn

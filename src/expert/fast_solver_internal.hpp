@@ -1,0 +1,50 @@
+#pragma once
+// The fast solver's node solve, shared with the fixed-mode solver: both solve
+// structured QPs of one round with some lane modes fixed, and one workspace
+// type serves both, so a caller may hand either back-end the other's.
+#include <vector>
+
+#include "lanechange/expert/lane_change_solver.hpp"
+#include "lanechange/expert/structured_qp.hpp"
+
+namespace lanechange::expert::detail {
+
+inline constexpr int kFreeMode = -1;            ///< a node of a search whose mode is not fixed
+inline constexpr double kModeTolerance = 1e-6;  ///< m: a lane row may be this far off and hold
+
+struct FastWorkspace final : LaneChangeWorkspace {
+  StructuredQp base;  // dynamics, costs and bounds of the round
+  StructuredQp node;  // the base plus the lane rows of one search node
+  QpWorkspace qp_workspace;
+  std::vector<std::vector<int>> stack;  // mode assignments waiting to be solved
+  std::vector<Control> start_controls;
+  long iterations = 0;         // of the interior-point method, for the solution's statistics
+  unsigned needed_bounds = 0;  // state components whose bounds this round's QPs carry
+};
+
+struct NodeOutcome {
+  bool feasible = false;
+  bool coarse = false;  // a point good enough to branch on, not a solution
+  bool numerical_failure = false;
+  int iterations = 0;
+  double objective = kInfinity;
+  Iterate path;
+};
+
+/// The workspace `hints` names if it is a FastWorkspace, else one made in `owned`.
+FastWorkspace& workspace_for(const SolveHints& hints, std::unique_ptr<LaneChangeWorkspace>& owned);
+
+/// True when some mode of node 0 holds at the initial state (or none applies).
+[[nodiscard]] bool initial_state_allowed(const LaneChangeQp& qp);
+
+/// Readies `ws` for the QPs of one round: the base problem without lane rows
+/// and the starting controls (the hint's, strictly inside the bounds).
+void prepare_round(const LaneChangeQp& qp, const SolveHints& hints, FastWorkspace& ws);
+
+/// The QP of `modes` (kFreeMode where a node is free); see fast_solver.cpp.
+/// A node whose optimum is proven to be at least `cutoff` comes back infeasible.
+/// With `coarse`, a node well below the cutoff may come back as a rough point.
+NodeOutcome solve_node(const LaneChangeQp& qp, const std::vector<int>& modes, FastWorkspace& ws,
+                       double cutoff = kInfinity, bool coarse = false);
+
+}  // namespace lanechange::expert::detail

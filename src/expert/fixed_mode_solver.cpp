@@ -1,0 +1,77 @@
+// The convex part of a round once the lane modes are fixed: one structured QP,
+// the same node solve the exact search uses for its leaves.
+#include <chrono>
+
+#include "expert/fast_solver_internal.hpp"
+#include "lanechange/expert/lane_change_solver.hpp"
+
+namespace lanechange::expert {
+
+namespace {
+
+// Why `modes` cannot be the integer part of `qp` ("" when they can).
+std::string unfit_modes(const LaneChangeQp& qp, const std::vector<int>* modes) {
+  if (modes == nullptr) return "no lane modes were given";
+  if (static_cast<int>(modes->size()) != qp.steps + 1) {
+    std::string what = "the lane modes cover ";
+    what += std::to_string(modes->size());
+    what += " nodes, not ";
+    what += std::to_string(qp.steps + 1);
+    return what;
+  }
+  for (int k = 1; k <= qp.steps; ++k) {
+    const int m = (*modes)[static_cast<std::size_t>(k)];
+    const auto count = static_cast<int>(qp.node_modes[static_cast<std::size_t>(k)].size());
+    if (count > 0 && (m < 0 || m >= count)) {
+      std::string what = "node ";
+      what += std::to_string(k);
+      what += " has no lane mode ";
+      what += std::to_string(m);
+      return what;
+    }
+  }
+  return "";
+}
+
+}  // namespace
+
+std::unique_ptr<LaneChangeWorkspace> FixedModeLaneChangeSolver::make_workspace() const {
+  return std::make_unique<detail::FastWorkspace>();
+}
+
+LaneChangeSolution FixedModeLaneChangeSolver::solve(const LaneChangeQp& qp,
+                                                    const MiqpSettings& /*settings*/,
+                                                    const SolveHints& hints) const {
+  const auto start = std::chrono::steady_clock::now();
+  LaneChangeSolution out;
+  out.status = MiqpStatus::Infeasible;
+  out.message = unfit_modes(qp, hints.modes);
+  if (out.message.empty() && !detail::initial_state_allowed(qp)) {
+    out.message = "the initial state breaks the lane rules";
+  }
+  if (!out.message.empty()) return out;
+  std::unique_ptr<LaneChangeWorkspace> owned;
+  detail::FastWorkspace& ws = detail::workspace_for(hints, owned);
+  detail::prepare_round(qp, hints, ws);
+  // Node 0's mode is not a choice (its state is given), so it stays free.
+  std::vector<int> modes = *hints.modes;
+  modes[0] = detail::kFreeMode;
+  detail::NodeOutcome node = detail::solve_node(qp, modes, ws);
+  out.nodes = 1;
+  out.qp_iterations = ws.iterations;
+  out.solve_ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  if (!node.feasible) {
+    out.status = node.numerical_failure ? MiqpStatus::NumericalError : MiqpStatus::Infeasible;
+    out.message =
+        node.numerical_failure ? "the QP failed" : "the lane modes leave no feasible path";
+    return out;
+  }
+  out.status = MiqpStatus::Optimal;
+  out.path = std::move(node.path);
+  out.objective = node.objective;
+  out.modes = *hints.modes;
+  return out;
+}
+
+}  // namespace lanechange::expert

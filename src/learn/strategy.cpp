@@ -1,0 +1,248 @@
+#include "lanechange/learn/strategy.hpp"
+
+#include <algorithm>
+#include <map>
+
+#include "lanechange/error.hpp"
+#include "lanechange/learn/learn_data.hpp"
+
+namespace lanechange::learn {
+
+using nlohmann::json;
+
+namespace {
+
+// Where each column of a plan node sits in PlanNodeTable::states.
+struct NodeColumns {
+  Eigen::Index t, ego_a0, x, y, v, theta, a, cars;  // cars: leader_x, then v, a, per car
+  NodeColumns() {
+    const auto& names = PlanNodeTable::columns();
+    auto at = [&names](const char* name) {
+      return static_cast<Eigen::Index>(std::find(names.begin(), names.end(), name) - names.begin());
+    };
+    t = at("t");
+    ego_a0 = at("ego_a0");
+    x = at("x");
+    y = at("y");
+    v = at("v");
+    theta = at("theta");
+    a = at("a");
+    cars = at("leader_x");
+  }
+};
+
+// The scene a plan node stands for: the ego and the cars there, the rest of
+// the horizon, the scenario's behavior. `last_a` is the acceleration applied
+// in the step before (the scene's ego.a means that).
+Eigen::VectorXd node_features(const Eigen::RowVectorXd& z, double last_a, double horizon_left,
+                              int behavior) {
+  static const NodeColumns c;
+  Scenario scene;
+  scene.behavior = static_cast<Behavior>(behavior);
+  scene.ego = {z(c.x), z(c.y), z(c.v), z(c.theta), last_a};
+  for (Eigen::Index i = 0; i < 3; ++i) {
+    const Eigen::Index at = c.cars + 3 * i;  // x, v, a of car i
+    scene.car(static_cast<Car>(i)) = {z(at), z(at + 1), z(at + 2)};
+  }
+  scene.horizon = horizon_left;
+  return strategy_features(scene);
+}
+
+// The rows of one plan (its nodes first to last in `rows`, of PlanNodeTable).
+void add_plan(const LearningData& data, const std::vector<int>& rows, int stride,
+              std::vector<Eigen::VectorXd>& features, std::vector<Strategy>& labels) {
+  static const NodeColumns c;
+  const PlanNodeTable& t = data.plan_nodes;
+  std::vector<int> modes;
+  modes.reserve(rows.size());
+  for (int r : rows) modes.push_back(t.lane_mode[static_cast<std::size_t>(r)]);
+  const int last = static_cast<int>(rows.size()) - 1;
+  const double end_time = t.states(rows.back(), c.t);
+  const int behavior =
+      data.scenarios
+          .behavior[static_cast<std::size_t>(t.scenario[static_cast<std::size_t>(rows[0])])];
+  const int step = stride > 0 ? stride : last + 1;
+  for (int k = 0; k + 2 <= last; k += step) {
+    const auto& z = t.states.row(rows[static_cast<std::size_t>(k)]);
+    const double last_a =
+        k == 0 ? z(c.ego_a0) : t.states(rows[static_cast<std::size_t>(k - 1)], c.a);
+    features.push_back(node_features(z, last_a, end_time - z(c.t), behavior));
+    labels.push_back(strategy_of(modes, k));
+  }
+}
+
+}  // namespace
+
+const std::vector<std::string>& strategy_feature_names() {
+  static const std::vector<std::string> names = {"ego_y",
+                                                 "ego_theta",
+                                                 "ego_v",
+                                                 "ego_a",
+                                                 "leader_dx",
+                                                 "leader_v",
+                                                 "leader_a",
+                                                 "follower_dx",
+                                                 "follower_v",
+                                                 "follower_a",
+                                                 "target_dx",
+                                                 "target_v",
+                                                 "target_a",
+                                                 "horizon",
+                                                 "behavior_constant_speed",
+                                                 "behavior_constant_accel",
+                                                 "behavior_idm"};
+  return names;
+}
+
+Eigen::VectorXd strategy_features(const Scenario& s) {
+  Eigen::VectorXd f(static_cast<Eigen::Index>(strategy_feature_names().size()));
+  f << s.ego.y, s.ego.theta, s.ego.v, s.ego.a, s.leader.x - s.ego.x, s.leader.v, s.leader.a,
+      s.follower.x - s.ego.x, s.follower.v, s.follower.a, s.target.x - s.ego.x, s.target.v,
+      s.target.a, s.horizon, 0.0, 0.0, 0.0;
+  f(14 + static_cast<Eigen::Index>(s.behavior)) = 1.0;
+  return f;
+}
+
+Strategy strategy_of(const std::vector<int>& lane_modes, int from) {
+  Strategy out;
+  for (std::size_t k = static_cast<std::size_t>(from) + 1; k < lane_modes.size(); ++k) {
+    const int m = lane_modes[k];
+    if (m < 0 || m > 2) {
+      std::string what = "node ";
+      what += std::to_string(k);
+      what += " of a plan has no lane mode";
+      throw InputError("", what);
+    }
+    out += static_cast<char>('0' + m);
+  }
+  return out;
+}
+
+StrategyRows strategy_rows(const LearningData& data, const std::vector<int>& scenarios,
+                           int node_stride) {
+  const std::vector<char> member = mask_of(scenarios, data.scenarios.rows());
+  StrategyRows out;
+  const PlanNodeTable& t = data.plan_nodes;
+  // Nodes of one plan are consecutive rows of the table.
+  for (int r = 0; r < t.rows();) {
+    std::vector<int> plan;
+    const int scenario = t.scenario[static_cast<std::size_t>(r)];
+    for (; r < t.rows() && t.scenario[static_cast<std::size_t>(r)] == scenario; ++r) {
+      plan.push_back(r);
+    }
+    if (member[static_cast<std::size_t>(scenario)] && plan.size() >= 3) {
+      add_plan(data, plan, node_stride, out.features, out.labels);
+    }
+  }
+  return out;
+}
+
+StrategyModel StrategyModel::fit(const StrategyRows& rows, const StrategySettings& settings) {
+  if (settings.neighbors < 1) throw InputError("strategy.neighbors", "must be at least 1");
+  const auto& features = rows.features;
+  const auto& labels = rows.labels;
+  if (features.empty()) {
+    throw InputError("--data", "holds no converged plan to learn lane strategies from");
+  }
+  StrategyModel m;
+  m.neighbors_ = settings.neighbors;
+  Eigen::MatrixXd x(static_cast<Eigen::Index>(features.size()), features[0].size());
+  for (std::size_t i = 0; i < features.size(); ++i) {
+    x.row(static_cast<Eigen::Index>(i)) = features[i].transpose();
+  }
+  m.standardizer_ = Standardizer::fit(x);
+  m.points_ = m.standardizer_.apply(x).transpose();
+  m.norms_ = m.points_.colwise().squaredNorm().transpose();
+  std::map<Strategy, int> index;
+  for (const Strategy& s : labels) {
+    const auto [it, fresh] = index.emplace(s, static_cast<int>(m.strategies_.size()));
+    if (fresh) m.strategies_.push_back(s);
+    m.label_.push_back(it->second);
+  }
+  return m;
+}
+
+std::vector<Strategy> StrategyModel::predict(const Eigen::VectorXd& features, int count) const {
+  if (features.size() != points_.rows()) {
+    std::string what = "the strategy model takes ";
+    what += std::to_string(points_.rows());
+    what += " features, not ";
+    what += std::to_string(features.size());
+    throw InputError("", what);
+  }
+  const Eigen::VectorXd q = (features - standardizer_.mean).cwiseQuotient(standardizer_.scale);
+  // |p - q|^2 = |p|^2 - 2 p'q + |q|^2: one matrix-vector product over the
+  // rows instead of a temporary as large as the table.
+  const Eigen::VectorXd d2 =
+      ((norms_ - 2.0 * (points_.transpose() * q)).array() + q.squaredNorm()).max(0.0).matrix();
+  std::vector<int> order(static_cast<std::size_t>(d2.size()));
+  for (std::size_t i = 0; i < order.size(); ++i) order[i] = static_cast<int>(i);
+  const auto k = std::min<std::size_t>(static_cast<std::size_t>(neighbors_), order.size());
+  const auto nearer = [&d2](int a, int b) { return d2(a) < d2(b); };
+  const auto kth = order.begin() + static_cast<std::ptrdiff_t>(k);
+  std::nth_element(order.begin(), kth, order.end(), nearer);
+  std::sort(order.begin(), kth, nearer);
+  // Inverse-distance votes: a scene seen before (distance 0) decides alone.
+  std::vector<std::pair<double, int>> votes;  // (weight, strategy)
+  for (std::size_t i = 0; i < k; ++i) {
+    const int s = label_[static_cast<std::size_t>(order[i])];
+    const double w = 1.0 / (std::sqrt(d2(order[i])) + 1e-9);
+    auto it =
+        std::find_if(votes.begin(), votes.end(), [s](const auto& v) { return v.second == s; });
+    if (it == votes.end()) {
+      votes.emplace_back(w, s);
+    } else {
+      it->first += w;
+    }
+  }
+  std::stable_sort(votes.begin(), votes.end(),
+                   [](const auto& a, const auto& b) { return a.first > b.first; });
+  std::vector<Strategy> out;
+  for (std::size_t i = 0; i < votes.size() && static_cast<int>(i) < count; ++i) {
+    out.push_back(strategies_[static_cast<std::size_t>(votes[i].second)]);
+  }
+  return out;
+}
+
+json StrategyModel::to_json() const {
+  std::vector<double> points(points_.data(), points_.data() + points_.size());
+  return {{"format", kStrategyFormat}, {"features", strategy_feature_names()},
+          {"neighbors", neighbors_},   {"standardizer", standardizer_.to_json()},
+          {"strategies", strategies_}, {"labels", label_},
+          {"points", points}};
+}
+
+StrategyModel StrategyModel::from_json(const json& j) {
+  if (j.value("format", std::string()) != kStrategyFormat) {
+    throw InputError("", "not a " + std::string(kStrategyFormat) + " strategy model");
+  }
+  if (j.at("features").get<std::vector<std::string>>() != strategy_feature_names()) {
+    throw InputError("", "the strategy model was trained on other features");
+  }
+  StrategyModel m;
+  m.neighbors_ = j.at("neighbors").get<int>();
+  m.standardizer_ = Standardizer::from_json(j.at("standardizer"));
+  m.strategies_ = j.at("strategies").get<std::vector<Strategy>>();
+  m.label_ = j.at("labels").get<std::vector<int>>();
+  const auto points = j.at("points").get<std::vector<double>>();
+  const auto width = static_cast<Eigen::Index>(strategy_feature_names().size());
+  const auto n = static_cast<Eigen::Index>(m.label_.size());
+  if (static_cast<Eigen::Index>(points.size()) != width * n || m.neighbors_ < 1) {
+    throw InputError("", "the strategy model's rows do not fit its labels");
+  }
+  for (const Strategy& s : m.strategies_) {
+    if (s.empty() || s.find_first_not_of("012") != Strategy::npos) {
+      throw InputError("", "the strategy model holds a strategy other than lane modes 0, 1, 2");
+    }
+  }
+  for (int l : m.label_) {
+    if (l < 0 || l >= static_cast<int>(m.strategies_.size())) {
+      throw InputError("", "the strategy model names a strategy it does not hold");
+    }
+  }
+  m.points_ = Eigen::Map<const Eigen::MatrixXd>(points.data(), width, n);
+  m.norms_ = m.points_.colwise().squaredNorm().transpose();
+  return m;
+}
+
+}  // namespace lanechange::learn

@@ -1,0 +1,165 @@
+#include "lanechange/planner/strategy_study.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <map>
+#include <vector>
+
+#include "lanechange/error.hpp"
+#include "lanechange/learn/model.hpp"
+#include "lanechange/sampler.hpp"
+#include "planner/strategy_qp_planner.hpp"
+
+namespace lanechange::planner {
+
+using nlohmann::json;
+
+namespace {
+
+double quantile(std::vector<double> v, double q) {
+  if (v.empty()) return NAN;
+  std::sort(v.begin(), v.end());
+  const auto at = static_cast<std::size_t>(std::ceil(q * double(v.size()))) - 1;
+  return v[std::min(at, v.size() - 1)];
+}
+
+json summary(const std::vector<double>& v) {
+  if (v.empty()) return {{"count", 0}};
+  return {{"count", v.size()},
+          {"median", quantile(v, 0.5)},
+          {"p95", quantile(v, 0.95)},
+          {"max", *std::max_element(v.begin(), v.end())}};
+}
+
+// What one scene contributes.
+struct Tally {
+  long long scenes = 0, expert_plans = 0, top1 = 0, topk = 0, followed = 0, fallbacks = 0;
+  // Why the candidates of the scenes with an expert plan failed.
+  std::map<std::string, long long> candidate_outcomes;
+  std::vector<double> ratio, ratio_learned, strategy_ms, expert_ms, strategy_ms_learned;
+};
+
+void add_scene(const StrategyQpPlanner& planner, const Scenario& scene, Tally& t) {
+  ++t.scenes;
+  const expert::ExpertResult exact = planner.exact().plan(scene);
+  const StrategyPlan learned = planner.plan(scene);
+  t.expert_ms.push_back(exact.total_ms);
+  t.strategy_ms.push_back(learned.total_ms);
+  const bool expert_found = exact.status == expert::PlanStatus::Converged &&
+                            !planner.exact().to_trajectory(exact, scene).collision;
+  if (learned.chosen >= 0) t.strategy_ms_learned.push_back(learned.total_ms);
+  if (!expert_found) return;
+  ++t.expert_plans;
+  for (const CandidateOutcome& c : learned.candidates) {
+    std::string what(expert::to_string(c.status));
+    if (c.status == expert::PlanStatus::Converged) {
+      what = c.collision ? "collision" : c.rescued ? "feasible_trust_region" : "feasible";
+    }
+    ++t.candidate_outcomes[what];
+  }
+  const auto& c = learned.candidates;
+  const bool first = !c.empty() && c.front().feasible();
+  t.top1 += first ? 1 : 0;
+  t.topk += std::any_of(c.begin(), c.end(), [](const auto& o) { return o.feasible(); }) ? 1 : 0;
+  t.followed += learned.chosen >= 0 ? 1 : 0;
+  t.fallbacks += learned.chosen < 0 ? 1 : 0;
+  if (learned.result.status != expert::PlanStatus::Converged) return;
+  const double ratio = learned.result.objective / exact.objective;
+  t.ratio.push_back(ratio);
+  if (learned.chosen >= 0) t.ratio_learned.push_back(ratio);
+}
+
+}  // namespace
+
+json run_strategy_study(const StrategyStudyOptions& o) {
+  if (o.count < 1) throw InputError("--count", "must be at least 1");
+  if (o.model_dir.empty()) throw InputError("--model", "must name a model directory");
+  o.config.validate();
+  // Open loop, as the data were made: the expert plans from the start with
+  // the config's own expert.monotone_lateral, not the closed loop's.
+  Config config = o.config;
+  config.closed_loop.monotone_lateral = false;
+  const StrategyQpPlanner planner(config, learn::Model::load(o.model_dir).strategy());
+  const ScenarioSampler sampler(o.config, o.seed);
+  Tally t;
+  for (int i = 0; i < o.count; ++i) {
+    add_scene(planner, sampler.sample(static_cast<std::uint64_t>(i), o.behavior), t);
+    if (o.progress != nullptr && (i + 1) % 50 == 0) {
+      *o.progress << "strategy-study: " << i + 1 << " of " << o.count << " scenes\n";
+    }
+  }
+  const double plans = double(std::max<long long>(t.expert_plans, 1));
+  const double expert_median = quantile(t.expert_ms, 0.5);
+  const double strategy_median = quantile(t.strategy_ms, 0.5);
+  return {{"model", o.model_dir},
+          {"seed", o.seed},
+          {"scenes", t.scenes},
+          {"candidates", o.config.strategy_qp.candidates},
+          {"first_feasible", o.config.strategy_qp.first_feasible},
+          {"expert_plans", t.expert_plans},
+          {"top1_feasible", double(t.top1) / plans},
+          {"topk_feasible", double(t.topk) / plans},
+          {"topk_followed", double(t.followed) / plans},
+          {"exact_fallbacks", t.fallbacks},
+          {"candidate_outcomes", t.candidate_outcomes},
+          {"cost_ratio", summary(t.ratio)},
+          {"cost_ratio_learned", summary(t.ratio_learned)},
+          {"strategy_ms", summary(t.strategy_ms)},
+          {"strategy_ms_without_fallback", summary(t.strategy_ms_learned)},
+          {"expert_ms", summary(t.expert_ms)},
+          {"speedup_of_medians", expert_median / strategy_median}};
+}
+
+std::string strategy_study_markdown(const json& s) {
+  auto number = [](const json& v, const char* format) {
+    if (!v.is_number()) return std::string("–");
+    char buffer[32];
+    std::snprintf(buffer, sizeof buffer, format, v.get<double>());
+    return std::string(buffer);
+  };
+  auto row = [&number](std::string& out, const char* what, const json& v) {
+    out += "| ";
+    out += what;
+    out += " | ";
+    out += number(v.value("median", json()), "%.4f");
+    out += " | ";
+    out += number(v.value("p95", json()), "%.4f");
+    out += " | ";
+    out += number(v.value("max", json()), "%.4f");
+    out += " |\n";
+  };
+  std::string out = "| scenes | expert plans | top-1 feasible | top-k feasible |";
+  out +=
+      " top-k followed | exact fallbacks | speedup (medians) |\n|---|---|---|---|---|---|---|\n| ";
+  out += std::to_string(s.at("scenes").get<long long>());
+  out += " | ";
+  out += std::to_string(s.at("expert_plans").get<long long>());
+  out += " | ";
+  out += number(100.0 * s.at("top1_feasible").get<double>(), "%.1f%%");
+  out += " | ";
+  out += number(100.0 * s.at("topk_feasible").get<double>(), "%.1f%%");
+  out += " | ";
+  out += number(100.0 * s.at("topk_followed").get<double>(), "%.1f%%");
+  out += " | ";
+  out += std::to_string(s.at("exact_fallbacks").get<long long>());
+  out += " | ";
+  out += number(s.at("speedup_of_medians"), "%.1f");
+  out += " |\n\nCandidates of the scenes with an expert plan:";
+  for (const auto& [what, n] : s.at("candidate_outcomes").items()) {
+    out += " ";
+    out += what;
+    out += " ";
+    out += std::to_string(n.get<long long>());
+    out += ";";
+  }
+  out += "\n\n| measure | median | p95 | worst |\n|---|---|---|---|\n";
+  row(out, "cost / exact optimum (all expert plans)", s.at("cost_ratio"));
+  row(out, "cost / exact optimum (learned strategy followed)", s.at("cost_ratio_learned"));
+  row(out, "strategy-qp ms per plan", s.at("strategy_ms"));
+  row(out, "strategy-qp ms per plan, no fallback", s.at("strategy_ms_without_fallback"));
+  row(out, "exact expert ms per plan", s.at("expert_ms"));
+  return out;
+}
+
+}  // namespace lanechange::planner

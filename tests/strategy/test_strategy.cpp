@@ -1,0 +1,195 @@
+// strategy-qp: the fixed-mode solve, the fallback to the exact search, and
+// the planner in closed loop, with strategy models fitted on expert plans.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <memory>
+
+#include "lanechange/error.hpp"
+#include "lanechange/expert/planner.hpp"
+#include "lanechange/learn/strategy.hpp"
+#include "lanechange/sampler.hpp"
+#include "lanechange/sim/simulator.hpp"
+#include "planner/strategy_qp_planner.hpp"
+#include "test_helpers.hpp"
+
+namespace lanechange {
+namespace {
+
+using expert::ExpertPlanner;
+using expert::ExpertResult;
+using expert::PlanStatus;
+
+std::shared_ptr<const expert::LaneChangeSolver> fast() {
+  return std::make_shared<expert::FastLaneChangeSolver>();
+}
+
+// The occupancy per node of a plan, as the data sets' lane_mode column has it.
+std::vector<int> lane_modes_of(const ExpertResult& r) {
+  std::vector<int> out;
+  for (const auto& o : r.occupancy) out.push_back(o ? static_cast<int>(*o) : -1);
+  return out;
+}
+
+// A model that has seen these scenes with these strategies, nothing else.
+std::shared_ptr<const learn::StrategyModel> model_of(const std::vector<Scenario>& scenes,
+                                                     const std::vector<learn::Strategy>& labels) {
+  learn::StrategyRows rows;
+  for (const Scenario& s : scenes) rows.features.push_back(learn::strategy_features(s));
+  rows.labels = labels;
+  return std::make_shared<const learn::StrategyModel>(learn::StrategyModel::fit(rows, {3, 0}));
+}
+
+TEST(Strategy, LaneModeIndicesFollowTheFormulation) {
+  const Scenario s = testing::open_road_scenario();
+  for (LaneRule rule : {LaneRule::EitherOr, LaneRule::Footprint}) {
+    Config config;
+    config.expert.lane_rule = rule;
+    ExpertResult r = ExpertPlanner(config, fast()).plan(s);
+    const auto qp = expert::build_lane_change_qp(s, config, r.path, r.prediction);
+    for (const auto& modes : qp.node_modes) {
+      for (int m = 0; m < static_cast<int>(modes.size()); ++m) {
+        EXPECT_EQ(expert::lane_mode_index(rule, modes[static_cast<std::size_t>(m)].occupancy), m);
+      }
+    }
+  }
+  EXPECT_EQ(expert::lane_mode_index(LaneRule::EitherOr, expert::LaneOccupancy::BothLanes), -1);
+}
+
+// The round's QP of an exact plan, solved with the plan's own modes fixed,
+// has the exact optimum: the integer part is all the search adds.
+TEST(Strategy, AStrategyFromAnExactPlanGivesBackItsCost) {
+  const Config config;
+  const ScenarioSampler sampler(config, 5);
+  const expert::FixedModeLaneChangeSolver fixed;
+  int compared = 0;
+  for (std::uint64_t i = 0; i < 16; ++i) {
+    const Scenario s = sampler.sample(i);
+    const ExpertResult exact = ExpertPlanner(config, fast()).plan(s);
+    // A plan the trust region rescued keeps its modes only within its box:
+    // about another point they may leave no path (a cycle's own modes).
+    if (exact.status != PlanStatus::Converged || std::isfinite(exact.rounds.back().trust_radius)) {
+      continue;
+    }
+    const auto qp =
+        expert::build_lane_change_qp(s, effective_config(config, s), exact.path, exact.prediction);
+    const auto best = expert::FastLaneChangeSolver().solve(qp, {});
+    ASSERT_EQ(best.status, expert::MiqpStatus::Optimal);
+    const auto one = fixed.solve(qp, {}, {nullptr, &best.modes, nullptr});
+    ASSERT_EQ(one.status, expert::MiqpStatus::Optimal) << one.message;
+    EXPECT_NEAR(one.objective, best.objective, 1e-6 * (1.0 + std::abs(best.objective)));
+    EXPECT_EQ(one.nodes, 1);
+    // The whole plan with the strategy fixed lands where the exact one does.
+    const ExpertResult again =
+        ExpertPlanner(config, std::make_shared<expert::FixedModeLaneChangeSolver>())
+            .plan(s, {}, {nullptr, &exact.modes});
+    ASSERT_EQ(again.status, PlanStatus::Converged) << "scene " << i << ": " << again.reason;
+    EXPECT_NEAR(again.objective, exact.objective, 0.01 * std::abs(exact.objective));
+    ++compared;
+  }
+  EXPECT_GE(compared, 3);
+}
+
+TEST(Strategy, FixedModeSolverRefusesModesThatDoNotFit) {
+  const Scenario s = testing::open_road_scenario();
+  const Config config;
+  const ExpertResult exact = ExpertPlanner(config, fast()).plan(s);
+  const auto qp = expert::build_lane_change_qp(s, config, exact.path, exact.prediction);
+  const expert::FixedModeLaneChangeSolver fixed;
+  EXPECT_EQ(fixed.solve(qp, {}).status, expert::MiqpStatus::Infeasible);
+  const std::vector<int> short_modes(3, 0);
+  const auto r = fixed.solve(qp, {}, {nullptr, &short_modes, nullptr});
+  EXPECT_EQ(r.status, expert::MiqpStatus::Infeasible);
+  EXPECT_NE(r.message.find("nodes"), std::string::npos) << r.message;
+  // The target lane from the first node: 0.1 s is too short to get there.
+  const auto jump = planner::modes_of_strategy("2", s.steps, config.expert.lane_rule);
+  EXPECT_EQ(fixed.solve(qp, {}, {nullptr, &jump, nullptr}).status, expert::MiqpStatus::Infeasible);
+}
+
+TEST(Strategy, StrategiesStretchAndShrinkToTheHorizon) {
+  const auto m = planner::modes_of_strategy("0122", 6, LaneRule::Footprint);
+  EXPECT_EQ(m, (std::vector<int>{-1, 0, 1, 2, 2, 2, 2}));
+  EXPECT_EQ(planner::modes_of_strategy("0122", 2, LaneRule::EitherOr),
+            (std::vector<int>{-1, 0, -1}));
+  EXPECT_EQ(learn::strategy_of({-1, 0, 1, 2}), "012");
+  EXPECT_EQ(learn::strategy_of({-1, 0, 1, 2}, 1), "12");
+  EXPECT_THROW((void)learn::strategy_of({-1, -1, 2}), InputError);
+}
+
+TEST(Strategy, TheVoteRanksTheNearestScenesStrategiesFirst) {
+  Scenario near = testing::open_road_scenario();
+  Scenario far = near;
+  far.target.x += 30.0;
+  const auto model = model_of({near, near, far}, {"000", "000", "222"});
+  const auto ranked = model->predict(near, 5);
+  ASSERT_EQ(ranked.size(), 2u);
+  EXPECT_EQ(ranked[0], "000");
+  EXPECT_EQ(model->predict(far, 1), std::vector<learn::Strategy>{"222"});
+  const auto copy = learn::StrategyModel::from_json(model->to_json());
+  EXPECT_EQ(copy.predict(near, 5), ranked);
+  nlohmann::json damaged = model->to_json();
+  damaged["strategies"][0] = "03";
+  EXPECT_THROW((void)learn::StrategyModel::from_json(damaged), InputError);
+}
+
+TEST(Strategy, AnInfeasiblePredictionFallsBackToTheExactAnswer) {
+  const Config config = testing::untimed_config();
+  const Scenario s = testing::open_road_scenario();
+  const planner::StrategyQpPlanner p(config, model_of({s}, {"2"}));
+  const planner::StrategyPlan learned = p.plan(s);
+  ASSERT_EQ(learned.candidates.size(), 1u);
+  EXPECT_FALSE(learned.candidates[0].feasible());
+  EXPECT_EQ(learned.chosen, -1);
+  const ExpertResult exact = p.exact().plan(s);
+  ASSERT_EQ(exact.status, PlanStatus::Converged);
+  EXPECT_EQ(learned.result.status, PlanStatus::Converged);
+  EXPECT_NEAR(learned.result.objective, exact.objective, 1e-6 * (1.0 + exact.objective));
+  EXPECT_EQ(learned.result.modes, exact.modes);
+}
+
+TEST(Strategy, AGoodPredictionIsFollowedWithTheExactCost) {
+  const Config config = testing::untimed_config();
+  const Scenario s = testing::open_road_scenario();
+  const planner::StrategyQpPlanner probe(config, model_of({s}, {"0"}));
+  const ExpertResult exact = probe.exact().plan(s);
+  ASSERT_EQ(exact.status, PlanStatus::Converged);
+  const learn::Strategy truth = learn::strategy_of(lane_modes_of(exact));
+  const planner::StrategyQpPlanner p(config, model_of({s, s}, {"2", truth}));
+  const planner::StrategyPlan learned = p.plan(s);
+  ASSERT_GE(learned.chosen, 0);
+  EXPECT_EQ(learned.candidates[static_cast<std::size_t>(learned.chosen)].strategy, truth);
+  EXPECT_NEAR(learned.result.objective, exact.objective, 0.01 * exact.objective);
+}
+
+// The strategies of the expert's closed-loop plans of a scene, from its start.
+std::shared_ptr<const learn::StrategyModel> model_from_expert(const Scenario& s,
+                                                              const Config& config) {
+  const ExpertResult exact =
+      planner::StrategyQpPlanner(config, model_of({s}, {"0"})).exact().plan(s);
+  if (exact.status != PlanStatus::Converged) return model_of({s}, {"0"});
+  return model_of({s}, {learn::strategy_of(lane_modes_of(exact))});
+}
+
+TEST(Strategy, ClosedLoopChangesLanesIntoAWideOpenGap) {
+  const Config config = testing::untimed_config();
+  const Scenario s = testing::open_road_scenario();
+  const auto p = std::make_shared<planner::StrategyQpPlanner>(config, model_from_expert(s, config));
+  const sim::Rollout r = sim::simulate(s, *p, config);
+  EXPECT_EQ(r.outcome, sim::Outcome::WellPosed) << r.reason;
+  EXPECT_FALSE(r.trajectory.collision);
+  EXPECT_NEAR(r.trajectory.ego.back().y, s.lane_width, config.labels.reach);
+}
+
+TEST(Strategy, ClosedLoopStaysInLaneWithoutAGap) {
+  const Config config = testing::untimed_config();
+  const Scenario s = testing::no_gap_scenario();
+  const auto p = std::make_shared<planner::StrategyQpPlanner>(
+      config, model_of({testing::open_road_scenario()}, {"0000011111222"}));
+  const sim::Rollout r = sim::simulate(s, *p, config);
+  EXPECT_EQ(r.outcome, sim::Outcome::Aborted) << r.reason;
+  EXPECT_FALSE(r.trajectory.collision);
+  EXPECT_LT(r.trajectory.ego.back().y, 0.5 * s.lane_width);
+}
+
+}  // namespace
+}  // namespace lanechange
