@@ -27,7 +27,7 @@ using nlohmann::json;
 
 namespace {
 
-constexpr std::string_view kEvaluationFormat = "lanechange.evaluation/1";
+constexpr std::string_view kEvaluationFormat = "lanechange.evaluation/2";
 constexpr const char* kManifest = "evaluation.json";
 
 json parameters_of(const EvaluateOptions& o) {
@@ -111,7 +111,7 @@ std::string rollout_row(long long index, const Scenario& s, const std::string& p
     row += ',';
     row += number(v);
   }
-  return row + "," + data::detail::csv_field(r.reason) + "\n";
+  return row + "," + m.target_lane_slot + "," + data::detail::csv_field(r.reason) + "\n";
 }
 
 }  // namespace
@@ -123,7 +123,8 @@ std::vector<std::string> rollout_columns() {
           "failures",    "clipped",       "time_to_target_lane",
           "min_gap",     "min_ttc",       "max_abs_accel",
           "rms_jerk",    "max_abs_omega", "median_step_ms",
-          "p99_step_ms", "max_step_ms",   "reason"};
+          "p99_step_ms", "max_step_ms",   "target_lane_slot",
+          "reason"};
 }
 
 EvaluateReport evaluate(const EvaluateOptions& o, const EvaluateRun& run) {

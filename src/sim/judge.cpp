@@ -5,6 +5,7 @@
 
 #include "lanechange/checks.hpp"
 #include "lanechange/error.hpp"
+#include "lanechange/sim/evaluate.hpp"
 #include "lanechange/sim/simulator.hpp"
 #include "lanechange/traffic.hpp"
 #include "sim/metrics.hpp"
@@ -71,13 +72,15 @@ void traffic_measures(const Trajectory& t, const Scenario& scene, RolloutMetrics
   }
 }
 
-// Nearest rank; 0 for no values (a rollout whose planner never acted).
-double quantile(std::vector<double> v, double q) {
-  if (v.empty()) return 0.0;
-  const auto rank = static_cast<std::size_t>(std::ceil(q * static_cast<double>(v.size())));
-  const auto at = v.begin() + static_cast<std::ptrdiff_t>(std::max<std::size_t>(rank, 1) - 1);
-  std::nth_element(v.begin(), at, v.end());
-  return *at;
+// The gap a lane change ended in tells a like-for-like comparison apart:
+// Eq. 1 lets the expert enter only between the follower and the target.
+std::string target_lane_slot(const Trajectory& t, const Scenario& scene) {
+  const EgoState& e = t.ego.back();
+  if (std::abs(e.y - scene.lane_width) > scene.lane_width / 2.0) return "";
+  const auto last = static_cast<std::size_t>(t.nodes() - 1);
+  if (t.others.car(Car::Target).x[last] < e.x) return "ahead_of_target";
+  if (t.others.car(Car::Follower).x[last] > e.x) return "behind_follower";
+  return "follower_target_gap";
 }
 
 }  // namespace
@@ -94,6 +97,7 @@ RolloutMetrics measure(const Rollout& rollout, const Scenario& scene, const Conf
     }
   }
   traffic_measures(t, scene, m);
+  m.target_lane_slot = target_lane_slot(t, scene);
   double jerk_sq = 0.0;
   const auto applied = static_cast<int>(rollout.steps.size());
   for (int k = 0; k < applied; ++k) {
@@ -119,8 +123,9 @@ RolloutMetrics measure(const Rollout& rollout, const Scenario& scene, const Conf
     m.overruns += s.overrun ? 1 : 0;
   }
   for (const StepRecord& s : rollout.steps) m.clipped += s.clipped ? 1 : 0;
-  m.median_step_ms = quantile(ms, 0.5);
-  m.p99_step_ms = quantile(ms, 0.99);
+  // 0, not NaN, for a rollout whose planner never acted.
+  m.median_step_ms = ms.empty() ? 0.0 : nearest_rank(ms, 0.5);
+  m.p99_step_ms = ms.empty() ? 0.0 : nearest_rank(ms, 0.99);
   return m;
 }
 

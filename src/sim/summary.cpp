@@ -45,6 +45,11 @@ RolloutRow parse(const std::string& line) {
   r.outcome = f[3];
   r.collision = f[4] == "1";
   r.at_fault = f[5] == "1";
+  r.target_lane_slot = f[before_reason - 1];
+  if (!r.target_lane_slot.empty() && r.target_lane_slot != "follower_target_gap" &&
+      r.target_lane_slot != "ahead_of_target" && r.target_lane_slot != "behind_follower") {
+    throw std::invalid_argument("unknown target_lane_slot \"" + r.target_lane_slot + "\"");
+  }
   double* numbers[] = {
       &r.takeovers,           &r.fallbacks,      &r.overruns,    &r.failures,      &r.clipped,
       &r.time_to_target_lane, &r.min_gap,        &r.min_ttc,     &r.max_abs_accel, &r.rms_jerk,
@@ -56,15 +61,6 @@ RolloutRow parse(const std::string& line) {
 }
 
 using Row = RolloutRow;
-
-// Nearest-rank percentile of the finite values; NaN without any.
-double percentile(std::vector<double> v, double q) {
-  v.erase(std::remove_if(v.begin(), v.end(), [](double x) { return !std::isfinite(x); }), v.end());
-  if (v.empty()) return NAN;
-  std::sort(v.begin(), v.end());
-  const auto rank = static_cast<std::size_t>(std::ceil(q * static_cast<double>(v.size())));
-  return v[std::max<std::size_t>(rank, 1) - 1];
-}
 
 std::string number(double v) {
   if (!std::isfinite(v)) return "";
@@ -102,13 +98,13 @@ std::string summary_row(const std::string& planner, const std::string& behavior,
       mean(&Row::takeovers),
       mean(&Row::fallbacks),
       mean(&Row::overruns),
-      percentile(values(&Row::median_step_ms), 0.5),
-      percentile(values(&Row::max_step_ms), 0.99),
-      percentile(values(&Row::max_step_ms), 1.0),
-      percentile(values(&Row::time_to_target_lane), 0.5),
-      percentile(values(&Row::min_ttc), 0.05),
+      nearest_rank(values(&Row::median_step_ms), 0.5),
+      nearest_rank(values(&Row::max_step_ms), 0.99),
+      nearest_rank(values(&Row::max_step_ms), 1.0),
+      nearest_rank(values(&Row::time_to_target_lane), 0.5),
+      nearest_rank(values(&Row::min_ttc), 0.05),
       mean(&Row::rms_jerk),
-      percentile(values(&Row::max_abs_accel), 0.95)};
+      nearest_rank(values(&Row::max_abs_accel), 0.95)};
   std::string line = planner + "," + behavior;
   for (double c : cells) {
     line += ',';
@@ -118,6 +114,15 @@ std::string summary_row(const std::string& planner, const std::string& behavior,
 }
 
 }  // namespace
+
+double nearest_rank(std::vector<double> values, double q) {
+  std::erase_if(values, [](double v) { return !std::isfinite(v); });
+  if (values.empty()) return NAN;
+  const auto rank = static_cast<std::size_t>(std::ceil(q * static_cast<double>(values.size())));
+  const auto at = values.begin() + static_cast<std::ptrdiff_t>(std::max<std::size_t>(rank, 1) - 1);
+  std::nth_element(values.begin(), at, values.end());
+  return *at;
+}
 
 std::vector<RolloutRow> read_rollouts(const std::string& path) {
   std::ifstream in(path);

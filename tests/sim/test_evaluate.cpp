@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -102,6 +103,11 @@ TEST(Evaluate, RolloutsReadBackAsWrittenAndAForeignFileIsNamed) {
     EXPECT_FALSE(row.reason.empty());
     if (row.planner == "keep-lane") {
       EXPECT_EQ(row.outcome, "aborted");
+      EXPECT_EQ(row.target_lane_slot, "");  // never left its lane
+    }
+    // The expert's problem (Eq. 1) admits only the follower-target gap.
+    if (row.planner == "miqp" && row.success()) {
+      EXPECT_EQ(row.target_lane_slot, "follower_target_gap") << row.index;
     }
   }
   testing::write_text(dir.file("bad.csv"), "index,behavior\n1,idm\n");
@@ -114,6 +120,26 @@ TEST(Evaluate, RolloutsReadBackAsWrittenAndAForeignFileIsNamed) {
   auto text = testing::read_text(dir.file("ev/rollouts.csv"));
   testing::write_text(dir.file("short.csv"), text + "7,idm,miqp\n");
   EXPECT_THROW((void)sim::read_rollouts(dir.file("short.csv")), InputError);
+  // A first row whose target_lane_slot (the cell before the reason) is foreign.
+  const auto lines = lines_of(dir.file("ev/rollouts.csv"));
+  std::size_t slot_start = 0;
+  for (std::size_t commas = 0; commas < sim::rollout_columns().size() - 2; ++commas) {
+    slot_start = lines[1].find(',', slot_start) + 1;
+  }
+  const std::string foreign =
+      lines[1].substr(0, slot_start) + "sideways" + lines[1].substr(lines[1].find(',', slot_start));
+  testing::write_text(dir.file("slot.csv"), lines[0] + "\n" + foreign + "\n");
+  EXPECT_THROW((void)sim::read_rollouts(dir.file("slot.csv")), InputError);
+}
+
+TEST(NearestRank, IsAnElementOfTheFiniteValuesAtItsRank) {
+  const std::vector<double> v = {5, NAN, 1, 4, INFINITY, 2, 3};
+  EXPECT_EQ(sim::nearest_rank(v, 0.5), 3);  // rank ceil(0.5 * 5) = 3 of 1..5
+  EXPECT_EQ(sim::nearest_rank(v, 1.0), 5);
+  EXPECT_EQ(sim::nearest_rank(v, 0.01), 1);
+  EXPECT_EQ(sim::nearest_rank(v, 0.99), 5);
+  EXPECT_TRUE(std::isnan(sim::nearest_rank({NAN}, 0.5)));
+  EXPECT_TRUE(std::isnan(sim::nearest_rank({}, 0.5)));
 }
 
 TEST(Evaluate, MpiRanksWriteWhatThreadsWrite) {

@@ -64,12 +64,17 @@ struct RolloutRow {
   double takeovers = 0, fallbacks = 0, overruns = 0, failures = 0, clipped = 0;
   double time_to_target_lane = 0, min_gap = 0, min_ttc = 0, max_abs_accel = 0, rms_jerk = 0;
   double max_abs_omega = 0, median_step_ms = 0, p99_step_ms = 0, max_step_ms = 0;
+  std::string target_lane_slot;  ///< RolloutMetrics::target_lane_slot
   [[nodiscard]] bool success() const { return outcome == "well_posed" && !collision; }
 };
 
 /// Reads a rollouts.csv (or one of its shards). InputError naming the file
 /// for a missing file, a header that is not ours, or a malformed row.
 [[nodiscard]] std::vector<RolloutRow> read_rollouts(const std::string& path);
+
+/// The nearest-rank q-quantile (0 < q <= 1) of the finite values; NaN if
+/// there are none. Every table of rollouts uses this one definition.
+[[nodiscard]] double nearest_rank(std::vector<double> values, double q);
 
 /// The column names of rollouts.csv and summary.csv.
 [[nodiscard]] std::vector<std::string> rollout_columns();

@@ -55,6 +55,10 @@ struct RolloutMetrics {
   int clipped = 0;
   int overruns = 0;
   int failures = 0;  ///< steps where the planner threw
+  /// Where the ego ends among the target lane's cars, if its centre ends in
+  /// that lane: "follower_target_gap" (the only gap Eq. 1 lets the expert
+  /// take), "ahead_of_target" or "behind_follower"; empty otherwise.
+  std::string target_lane_slot;
 };
 
 struct Rollout {
