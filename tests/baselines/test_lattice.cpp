@@ -104,6 +104,24 @@ TEST(Lattice, ACandidateIntoACarIsInvalid) {
   EXPECT_GT(into_target_lane, 0);
 }
 
+TEST(SafeDistances, TheExpertsGapRefusesTheSideAheadOfTheTarget) {
+  Scenario s = testing::open_road_scenario();
+  s.target = {-30.0, 8.0, 0.0};  // far behind the ego, in the target lane
+  s.follower = {-60.0, 8.0, 0.0};
+  const Config config;
+  const auto cars = baselines::predict_from(observe(s), config, 10);
+  // The ego already in the target lane, holding its speed: far ahead of both.
+  std::vector<EgoState> path;
+  for (int k = 0; k <= 10; ++k) path.push_back({8.0 * 0.1 * k, s.lane_width, 8.0, 0.0, 0.0});
+  EXPECT_TRUE(baselines::keeps_target_lane_distances(path, cars, s));
+  EXPECT_FALSE(baselines::keeps_target_lane_distances(path, cars, s, true));
+  // Between the two, at their safe distances, both rules agree.
+  s.target = {40.0, 8.0, 0.0};
+  const auto between = baselines::predict_from(observe(s), config, 10);
+  EXPECT_TRUE(baselines::keeps_target_lane_distances(path, between, s));
+  EXPECT_TRUE(baselines::keeps_target_lane_distances(path, between, s, true));
+}
+
 TEST(Lattice, BadSettingsAreInputErrors) {
   for (const char* bad :
        {R"({"lattice": {"min_duration": 0}})", R"({"lattice": {"max_duration": 1}})",
