@@ -37,8 +37,7 @@ namespace lanechange::baselines {
 /// With `follower_target_gap`, the ego must also be on the expert's side of
 /// each: ahead of the follower and behind the target.
 [[nodiscard]] bool keeps_target_lane_distances(std::span<const EgoState> path,
-                                               const TrafficPrediction& cars,
-                                               const Scenario& scene,
+                                               const TrafficPrediction& cars, const Scenario& scene,
                                                bool follower_target_gap = false);
 
 }  // namespace lanechange::baselines
