@@ -3,9 +3,9 @@
 #include <unistd.h>
 
 #include <iostream>
-#include <sstream>
 
 #include "lanechange/experiments/experiments.hpp"
+#include "planner_list.hpp"
 #include "team.hpp"
 
 namespace lanechange::app {
@@ -31,11 +31,7 @@ void add_experiments(CLI::App& app, ConfigSource config_source) {
   cmd->callback([config_source] {
     o.config = config_source();
     o.scale = experiments::scale_from_string(scale, "--scale");
-    o.planners.clear();
-    std::stringstream names(planners);
-    for (std::string name; std::getline(names, name, ',');) {
-      if (!name.empty()) o.planners.push_back(name);
-    }
+    o.planners = planner_list(planners);
     o.figures = !no_figures;
     const auto team = make_team();
     o.team = team.get();

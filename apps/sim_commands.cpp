@@ -4,7 +4,6 @@
 
 #include <fstream>
 #include <iostream>
-#include <sstream>
 
 #include "lanechange/baselines/baselines.hpp"
 #include "lanechange/error.hpp"
@@ -13,6 +12,7 @@
 #include "lanechange/sim/evaluate.hpp"
 #include "lanechange/sim/simulator.hpp"
 #include "lanechange/trajectory.hpp"
+#include "planner_list.hpp"
 #include "team.hpp"
 
 namespace lanechange::app {
@@ -83,9 +83,7 @@ void add_evaluate(CLI::App& app, ConfigSource config_source) {
     o.make_planner = baselines::make_planner;
     o.behavior.reset();
     if (behavior != "all") o.behavior = behavior_from_string(behavior, "--behavior");
-    o.planners.clear();
-    std::stringstream names(planners);
-    for (std::string name; std::getline(names, name, ',');) o.planners.push_back(name);
+    o.planners = planner_list(planners);
     const auto team = make_team();
     sim::EvaluateRun run;
     run.jobs = jobs;
