@@ -100,15 +100,20 @@ void add_plan(CLI::App& app, const GlobalOptions& global) {
   static double time_limit = 60.0;
   static std::string out_path = "-";
   cmd->add_option("--scenario", scenario_path, "Scenario JSON file")->required();
-  cmd->add_option("--planner", planner, "Planner: miqp (mlp-miqp, mpc, dwa: not built yet)");
+  cmd->add_option("--planner", planner,
+                  "Planner: miqp, the expert's open-loop plan (the closed-loop planners run with "
+                  "simulate and evaluate)");
   cmd->add_option("--solver", solver, "MIQP back-end: fast (ours) or reference (Bonmin B-BB)");
   cmd->add_option("--time-limit", time_limit, "Seconds for the whole plan")
       ->check(CLI::PositiveNumber);
   cmd->add_option("--out", out_path, "Trajectory JSON file, or - for standard output");
   cmd->callback([&global] {
     if (planner != "miqp") {
-      throw lc::InputError("--planner",
-                           "planner \"" + planner + "\" is not available yet (miqp is)");
+      std::string message = "plan makes the expert's open-loop plan (miqp); \"";
+      message += planner;
+      message += "\" acts in closed loop: use simulate --planner ";
+      message += planner;
+      throw lc::InputError("--planner", message);
     }
     const lc::Config config = global.config();
     const lc::Scenario scenario = lc::load_scenario(scenario_path, config);

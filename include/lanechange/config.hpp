@@ -3,6 +3,7 @@
 // docs/config.md (which cites NOTES.md and the paper). A Config can be saved
 // to and loaded from JSON; a loaded file may give any subset of the fields.
 #include <nlohmann/json_fwd.hpp>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -276,7 +277,10 @@ struct Config {
   VehicleSize vehicle;
   Limits limits;
   IdmParameters idm;
-  double traffic_max_speed = 60.0 / 3.6;  ///< m/s: constant-accel cars stay in [0, this]
+  /// m/s: a constant-acceleration car speeding up stops accelerating here
+  /// (the paper's traffic stays within 60 km/h); none (JSON null): no cap.
+  /// Never the ego's bound, and never applied to a car already faster.
+  std::optional<double> traffic_max_speed = 60.0 / 3.6;
   TrafficIntegration traffic_integration = TrafficIntegration::Ballistic;
   SafetyMargins safety;
   ExpertSettings expert;

@@ -57,6 +57,10 @@ struct Scenario {
   [[nodiscard]] CarState& car(Car which);
   /// Lane centre of a car: 0 for the leader, lane_width for the others.
   [[nodiscard]] double lane_center(Car which) const;
+  /// The ego's speed bounds at time t of a plan. An ego that starts outside
+  /// limits.v (recorded traffic) meets them from the first moment full
+  /// braking or acceleration can reach them; inside them, limits.v.
+  [[nodiscard]] Interval speed_bounds_at(double t) const;
 };
 
 /// A scenario with every optional field taken from `defaults`.

@@ -1,6 +1,7 @@
 #pragma once
-// The other cars: constant speed, constant acceleration (speed held in
-// [0, traffic_max_speed]) or the Intelligent Driver Model. The same step
+// The other cars: constant speed, constant acceleration (stopping at 0, and
+// at traffic_max_speed when speeding up, if the config sets one) or the
+// Intelligent Driver Model. The same step
 // serves a planner's prediction and the closed-loop simulation.
 #include <array>
 #include <vector>
@@ -23,9 +24,11 @@ struct EgoFootprint {
 [[nodiscard]] double idm_acceleration(const IdmParameters& p, double v, double gap,
                                       double leader_speed);
 
-/// Exact motion under constant acceleration a for dt seconds, with the speed
-/// held in [0, v_max] once it reaches a bound.
-void advance_constant_accel(CarState& car, double dt, double v_max);
+/// Exact motion under constant acceleration a for dt seconds. A braking car
+/// stops at 0; a car speeding up holds its speed at `cap` once it gets
+/// there. A car at constant speed, or already above the cap, keeps its
+/// speed: a recorded car faster than the cap is not slowed by the model.
+void advance_constant_accel(CarState& car, double dt, double cap);
 
 /// True when the ego's body (width `ego_width`, centre y) reaches into the
 /// lane centred at `lane_center`.
@@ -51,7 +54,7 @@ class TrafficModel {
   double lane_width_;
   VehicleSize vehicle_;
   IdmParameters idm_;
-  double v_max_;
+  double speed_cap_;  ///< +infinity without a cap
   TrafficIntegration integration_;
   std::array<CarState, 3> cars_;
   double time_ = 0.0;

@@ -91,7 +91,8 @@ void Config::validate() const {
   require(idm.max_accel > 0, "idm.max_accel", "must be positive");
   require(idm.comfortable_decel > 0, "idm.comfortable_decel", "must be positive");
   require(idm.exponent > 0, "idm.exponent", "must be positive");
-  require(traffic_max_speed > 0, "traffic_max_speed", "must be positive");
+  require(!traffic_max_speed || *traffic_max_speed > 0, "traffic_max_speed",
+          "must be positive, or null for no cap");
   for (const auto* d : {&safety.leader, &safety.follower, &safety.target}) {
     require(d->standstill >= 0 && d->time_headway >= 0, "safety", "distances must not be negative");
   }

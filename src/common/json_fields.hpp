@@ -6,6 +6,7 @@
 // finiteness of every number and rejects unknown keys, naming the JSON path.
 #include <cmath>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <set>
 #include <span>
 #include <string>
@@ -46,6 +47,17 @@ inline void read_value(const json& j, const std::string& path, double& out) {
   if (!j.is_number()) throw InputError(path, "must be a number");
   out = j.get<double>();
   if (!std::isfinite(out)) throw InputError(path, "must be finite");
+}
+
+// null stands for "none" (a cap that is not asked for).
+inline void read_value(const json& j, const std::string& path, std::optional<double>& out) {
+  if (j.is_null()) {
+    out.reset();
+    return;
+  }
+  double value = 0.0;
+  read_value(j, path, value);
+  out = value;
 }
 
 inline void read_value(const json& j, const std::string& path, int& out) {
@@ -125,6 +137,7 @@ void read_value(const json& j, const std::string& path, T& out) {
 }
 
 inline json write_value(double v) { return v; }
+inline json write_value(const std::optional<double>& v) { return v ? json(*v) : json(nullptr); }
 inline json write_value(int v) { return v; }
 inline json write_value(bool v) { return v; }
 inline json write_value(const std::string& v) { return v; }

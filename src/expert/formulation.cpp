@@ -153,9 +153,11 @@ LaneChangeQp build_lane_change_qp(const Scenario& s, const Config& config, const
     const bool monotone = e.monotone_lateral && s.ego.y < s.lane_width - config.labels.reach;
     const double lowest_heading =
         monotone ? std::min(0.0, s.ego.theta + s.limits.omega.hi * t) : -std::numbers::pi / 2;
-    lo << s.ego.x - kXSlack, -s.limits.lateral_margin, s.limits.v.lo, lowest_heading;
-    hi << s.ego.x + s.limits.v.hi * t + kXSlack, s.lane_width + s.limits.lateral_margin,
-        s.limits.v.hi, std::numbers::pi / 2;
+    // Like the heading's, from the first node the ego can meet it.
+    const Interval speed = s.speed_bounds_at(t);
+    lo << s.ego.x - kXSlack, -s.limits.lateral_margin, speed.lo, lowest_heading;
+    hi << s.ego.x + std::max(s.limits.v.hi, s.ego.v) * t + kXSlack,
+        s.lane_width + s.limits.lateral_margin, speed.hi, std::numbers::pi / 2;
     qp.state_lower.push_back(lo);
     qp.state_upper.push_back(hi);
   }

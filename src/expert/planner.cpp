@@ -292,6 +292,39 @@ void trust_region_rounds(const RoundContext& c, ExpertResult& result, Iterate pr
   result.reason = reason;
 }
 
+// Recorded traffic may start the ego closer than Eq. 1 allows. The plan then
+// fails where no node can restore the distance in time, and the reason says
+// so rather than blaming the lane sequence.
+std::string start_inside_safe_distance(const Scenario& s) {
+  const double half_width = 0.5 * s.vehicle.width;
+  const double boundary = 0.5 * s.lane_width;
+  const bool in_ego_lane = s.ego.y - half_width < boundary;
+  const bool in_target_lane = s.ego.y + half_width > boundary;
+  const auto describe = [](const char* car, double gap, double needed) {
+    char text[128];
+    std::snprintf(text, sizeof text,
+                  "the ego starts inside the %s's safe distance (%.1f m, %.1f m needed)", car, gap,
+                  needed);
+    return std::string(text);
+  };
+  const SafetyMargins& d = s.safe_distance;
+  const double to_leader = s.leader.x - s.ego.x;
+  const double leader_needs = d.leader.standstill + d.leader.time_headway * s.ego.v;
+  if (in_ego_lane && to_leader >= 0 && to_leader < leader_needs) {
+    return describe("leader", to_leader, leader_needs);
+  }
+  const double to_target = s.target.x - s.ego.x;
+  const double target_needs = d.target.standstill + d.target.time_headway * s.ego.v;
+  if (in_target_lane && to_target < target_needs)
+    return describe("target", to_target, target_needs);
+  const double from_follower = s.ego.x - s.follower.x;
+  const double follower_needs = d.follower.standstill + d.follower.time_headway * s.follower.v;
+  if (in_target_lane && from_follower < follower_needs) {
+    return describe("follower", from_follower, follower_needs);
+  }
+  return "";
+}
+
 }  // namespace
 
 ExpertResult ExpertPlanner::plan(const Scenario& scenario, const PlanLimits& limits,
@@ -322,6 +355,10 @@ ExpertResult ExpertPlanner::plan(const Scenario& scenario, const PlanLimits& lim
       result.status == PlanStatus::Cycling || result.status == PlanStatus::IterationLimit;
   if (failed_to_converge && config.expert.globalisation == Globalisation::TrustRegion) {
     trust_region_rounds(context, result, std::move(previous));
+  }
+  if (result.status == PlanStatus::Infeasible) {
+    const std::string why = start_inside_safe_distance(scenario);
+    if (!why.empty()) result.reason += "; " + why;
   }
   result.total_ms = elapsed_ms(start);
   return result;

@@ -1,5 +1,6 @@
 #include "lanechange/scenario.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 
@@ -50,6 +51,11 @@ CarState& Scenario::car(Car which) {
 }
 
 double Scenario::lane_center(Car which) const { return which == Car::Leader ? 0.0 : lane_width; }
+
+Interval Scenario::speed_bounds_at(double t) const {
+  return {std::min(limits.v.lo, ego.v + limits.a.hi * t),
+          std::max(limits.v.hi, ego.v + limits.a.lo * t)};
+}
 
 Scenario default_scenario(const Config& defaults) {
   Scenario s;

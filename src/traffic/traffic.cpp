@@ -20,11 +20,11 @@ double idm_acceleration(const IdmParameters& p, double v, double gap, double lea
   return p.max_accel * (free_road - ratio * ratio);
 }
 
-void advance_constant_accel(CarState& car, double dt, double v_max) {
-  const double bound = car.a > 0 ? v_max : 0.0;
+void advance_constant_accel(CarState& car, double dt, double cap) {
+  const double bound = car.a > 0 ? cap : 0.0;
   const bool moving_towards_bound = car.a > 0 ? car.v < bound : (car.a < 0 && car.v > bound);
   if (!moving_towards_bound) {
-    car.v = std::clamp(car.v, 0.0, v_max);
+    car.v = std::max(car.v, 0.0);
     car.x += car.v * dt;
     return;
   }
@@ -48,7 +48,7 @@ TrafficModel::TrafficModel(const Scenario& scenario, const Config& config)
       lane_width_(scenario.lane_width),
       vehicle_(scenario.vehicle),
       idm_(scenario.idm),
-      v_max_(config.traffic_max_speed),
+      speed_cap_(config.traffic_max_speed.value_or(std::numeric_limits<double>::infinity())),
       integration_(config.traffic_integration),
       cars_{scenario.leader, scenario.follower, scenario.target} {
   if (behavior_ == Behavior::ConstantSpeed) {
@@ -98,7 +98,7 @@ void TrafficModel::step(double dt, const EgoFootprint& ego) {
         c.v += c.a * dt;
       }
     } else {
-      advance_constant_accel(c, dt, v_max_);
+      advance_constant_accel(c, dt, speed_cap_);
     }
   }
   time_ += dt;

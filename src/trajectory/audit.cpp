@@ -46,7 +46,8 @@ void check_bounds(const Trajectory& tr, const Scenario& s, const AuditTolerances
   }
   for (int k = 1; k < tr.nodes(); ++k) {
     const EgoState& z = tr.ego[k];
-    if (z.v < lim.v.lo - tol.states || z.v > lim.v.hi + tol.states) {
+    const Interval speed = s.speed_bounds_at(tr.t[k]);
+    if (z.v < speed.lo - tol.states || z.v > speed.hi + tol.states) {
       problems.push_back(describe("v[%d] = %.4f is out of its bounds", k, z.v));
     }
     if (z.y < -lim.lateral_margin - tol.states ||

@@ -201,6 +201,46 @@ void expect_audit_passes(const Trajectory& t, const Scenario& s, const Config& c
   for (const std::string& problem : audit_trajectory(t, s, c)) ADD_FAILURE() << problem;
 }
 
+// Recorded highway traffic: the ego may start above its own speed bound. The
+// bound then holds from the first node full braking reaches it.
+TEST(Planner, AnEgoAboveItsSpeedBoundMeetsItAsSoonAsItCan) {
+  Scenario s = open_road_scenario();
+  s.ego.v = 19.0;
+  s.leader = {80.0, 19.0, 0.0};
+  s.follower = {-80.0, 19.0, 0.0};
+  s.target = {120.0, 19.0, 0.0};
+  ASSERT_GT(s.ego.v, s.limits.v.hi);
+  const ExpertPlanner planner(Config{}, std::make_shared<FastLaneChangeSolver>());
+  const ExpertResult r = planner.plan(s);
+  ASSERT_EQ(r.status, PlanStatus::Converged) << r.reason;
+  const Trajectory t = planner.to_trajectory(r, s);
+  expect_audit_passes(t, s, Config{});
+  const double reachable_at = (s.ego.v - s.limits.v.hi) / -s.limits.a.lo;
+  for (int k = 0; k < t.nodes(); ++k) {
+    EXPECT_LE(t.ego[k].v, s.speed_bounds_at(t.t[k]).hi + 1e-6) << k;
+    if (t.t[k] >= reachable_at) {
+      EXPECT_LE(t.ego[k].v, s.limits.v.hi + 1e-6) << k;
+    }
+  }
+  EXPECT_EQ(s.speed_bounds_at(0.0).hi, s.ego.v);
+  EXPECT_EQ(open_road_scenario().speed_bounds_at(0.0).hi, s.limits.v.hi);  // inside: unchanged
+}
+
+TEST(Planner, AStartInsideTheLeadersSafeDistanceIsTheReasonGiven) {
+  Scenario s = open_road_scenario();
+  s.leader = {6.0, 2.0, 0.0};  // 1.6 m bumper to bumper, far inside 8.4 m + 0.5 s
+  s.follower = {-2.0, 8.0, 0.0};
+  s.target = {3.0, 8.0, 0.0};  // and no gap beside
+  const ExpertPlanner planner(Config{}, std::make_shared<FastLaneChangeSolver>());
+  const ExpertResult r = planner.plan(s);
+  ASSERT_EQ(r.status, PlanStatus::Infeasible) << r.reason;
+  EXPECT_NE(r.reason.find("inside the leader's safe distance"), std::string::npos) << r.reason;
+  // A plan that fails for another cause is not blamed on the start.
+  const ExpertResult other = planner.plan(no_gap_scenario());
+  ASSERT_EQ(other.status, PlanStatus::Infeasible);
+  EXPECT_EQ(other.reason.find("safe distance"), std::string::npos) << other.reason;
+}
+
 TEST(Planner, WideOpenGapIsWellPosed) {
   for (Behavior b : {Behavior::ConstantSpeed, Behavior::ConstantAccel, Behavior::Idm}) {
     const Scenario s = open_road_scenario(b);

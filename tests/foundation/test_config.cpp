@@ -38,6 +38,16 @@ TEST(Config, GlobalisationRoundTripsThroughJson) {
   EXPECT_EQ(make_preset("authors").expert.globalisation, Globalisation::Off);
 }
 
+TEST(Config, TheTrafficCapIsOptional) {
+  const Config none = config_from_json(nlohmann::json::parse(R"({"traffic_max_speed": null})"));
+  EXPECT_FALSE(none.traffic_max_speed.has_value());
+  const nlohmann::json written = none;
+  EXPECT_TRUE(written["traffic_max_speed"].is_null());
+  EXPECT_FALSE(config_from_json(written).traffic_max_speed.has_value());
+  const Config fast = config_from_json(nlohmann::json::parse(R"({"traffic_max_speed": 36.1})"));
+  EXPECT_DOUBLE_EQ(fast.traffic_max_speed.value_or(0.0), 36.1);
+}
+
 TEST(Config, PartialFileStartsFromItsPreset) {
   const Config c = config_from_json(
       nlohmann::json::parse(R"({"preset": "authors", "expert": {"max_iterations": 3}})"));
@@ -77,6 +87,8 @@ TEST(Config, RejectsUnknownKeysAndBadValuesByName) {
   EXPECT_EQ(field_of(R"({"expert": {"trust_shrink": 1}})"), "expert.trust_shrink");
   EXPECT_EQ(field_of(R"({"expert": {"trust_rounds": 0}})"), "expert.trust_rounds");
   EXPECT_EQ(field_of(R"({"preset": "nobody"})"), "preset");
+  EXPECT_EQ(field_of(R"({"traffic_max_speed": 0})"), "traffic_max_speed");
+  EXPECT_EQ(field_of(R"({"traffic_max_speed": "none"})"), "traffic_max_speed");
   EXPECT_EQ(field_of(R"({"idm": {"max_accel": "fast"}})"), "idm.max_accel");
   EXPECT_EQ(field_of(R"({"expert": {"cycle_tolerance": -1e-3}})"), "expert.cycle_tolerance");
   EXPECT_EQ(field_of(R"({"expert": {"cycle_tolerance": 0}})"), "<accepted>");

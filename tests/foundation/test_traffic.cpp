@@ -102,6 +102,35 @@ TEST(ConstantAccel, ClampsAtTheSpeedLimit) {
   EXPECT_NEAR(car.x, 7.75 + 24.0, 1e-12);
 }
 
+// Recorded highway traffic runs above the paper's 60 km/h: the prediction
+// must keep a car's speed rather than cap it at a bound meant for the ego.
+TEST(ConstantSpeed, AFastCarKeepsItsSpeedWhateverTheCap) {
+  Scenario s = two_lane_scene(Behavior::ConstantSpeed);
+  s.follower.v = 16.73;  // above the default cap of 60 km/h
+  const Config config;
+  ASSERT_TRUE(config.traffic_max_speed.has_value());
+  ASSERT_GT(s.follower.v, *config.traffic_max_speed);
+  const TrafficPrediction p = predict_traffic(s, config, 50, 0.1);
+  EXPECT_DOUBLE_EQ(p.car(Car::Follower).v.back(), 16.73);
+  EXPECT_NEAR(p.car(Car::Follower).x.back(), s.follower.x + 16.73 * 5.0, 1e-9);
+}
+
+TEST(ConstantAccel, ACarAboveTheCapIsNotSlowedAndNoCapMeansNone) {
+  CarState above{0.0, 20.0, 1.0};
+  advance_constant_accel(above, 1.0, 16.0);
+  EXPECT_DOUBLE_EQ(above.v, 20.0);
+  EXPECT_DOUBLE_EQ(above.x, 20.0);
+  Scenario s = two_lane_scene(Behavior::ConstantAccel);
+  s.target.v = 15.0;
+  s.target.a = 2.0;
+  Config uncapped;
+  uncapped.traffic_max_speed.reset();
+  const TrafficPrediction p = predict_traffic(s, uncapped, 50, 0.1);
+  EXPECT_NEAR(p.car(Car::Target).v.back(), 25.0, 1e-9);
+  const TrafficPrediction capped = predict_traffic(s, Config{}, 50, 0.1);
+  EXPECT_NEAR(capped.car(Car::Target).v.back(), 60.0 / 3.6, 1e-9);
+}
+
 TEST(ConstantAccel, PredictionMatchesClosedForm) {
   Scenario s = two_lane_scene(Behavior::ConstantAccel);
   s.leader.a = 0.5;
