@@ -2,7 +2,9 @@
 // A lane-change scenario (spec/formats.md, "lanechange.scenario/1"): the ego,
 // the leader in its lane, and the follower and target (leader) in the lane to
 // its left. x is along the road, y across it; x and y locate a car's centre.
+#include <array>
 #include <nlohmann/json_fwd.hpp>
+#include <optional>
 #include <string>
 #include <string_view>
 
@@ -52,8 +54,19 @@ struct Scenario {
   IdmParameters idm;
   SafetyMargins safe_distance;
   Limits limits;
+  /// A car's own body where the scene gives one (recorded traffic: trucks,
+  /// vans); absent, the car has `vehicle`'s, as the ego does.
+  std::array<std::optional<VehicleSize>, 3> car_size;
 
   [[nodiscard]] const CarState& car(Car which) const;
+  [[nodiscard]] VehicleSize size_of(Car which) const;
+  /// Bumper to bumper between the ego and a car whose centre is dx ahead
+  /// (negative: behind) of the ego's.
+  [[nodiscard]] double bumper_gap(Car which, double dx) const;
+  /// Eq. 1's distances, centre to centre. `safe_distance` is set for a car
+  /// of the ego's length; a longer car's centre sits further from its
+  /// bumper, so its standstill distance grows by half the difference.
+  [[nodiscard]] SafetyMargins centre_safe_distances() const;
   [[nodiscard]] CarState& car(Car which);
   /// Lane centre of a car: 0 for the leader, lane_width for the others.
   [[nodiscard]] double lane_center(Car which) const;

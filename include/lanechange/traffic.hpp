@@ -52,10 +52,11 @@ class TrafficModel {
 
   Behavior behavior_;
   double lane_width_;
-  VehicleSize vehicle_;
+  VehicleSize vehicle_;  ///< the ego's body
   IdmParameters idm_;
   double speed_cap_;  ///< +infinity without a cap
   TrafficIntegration integration_;
+  std::array<double, 3> length_;  ///< each car's
   std::array<CarState, 3> cars_;
   double time_ = 0.0;
 };

@@ -38,8 +38,9 @@ bool can_stop_safely(const EgoState& end, const TrafficPrediction& cars, const S
   for (const Car c : kAllCars) {
     const double center = scene.lane_center(c);
     if (!body_in_lane(end.y, scene.vehicle.width, center, scene.lane_width)) continue;
-    const double gap = cars.car(c).x[last] - end.x - scene.vehicle.length;
-    if (gap < -scene.vehicle.length) continue;  // behind the ego: not a car to stop for
+    const double ahead_by = cars.car(c).x[last] - end.x;
+    if (ahead_by < 0) continue;  // behind the ego: not a car to stop for
+    const double gap = scene.bumper_gap(c, ahead_by);
     const double v_car = cars.car(c).v[last];
     const double braking = std::max(0.0, end.v * end.v - v_car * v_car) / (2.0 * s.braking_decel);
     if (gap - s.margin < braking) return false;

@@ -53,20 +53,19 @@ std::vector<double> end_speeds(double speed, const Limits& limits, const Lattice
 // the ego now, with its safe distance of Eq. 1.
 struct Followed {
   Car car;
-  const SafeDistance* distance;
+  SafeDistance distance;
 };
 
 std::optional<Followed> followed_car(const planner::Observation& o, double end_offset) {
   const Scenario& scene = *o.scene;
   const bool target_lane = end_offset > scene.lane_width / 2.0;
-  const CarState* ahead = planner::car_ahead(o, target_lane);
-  if (ahead == nullptr) return std::nullopt;
-  const Car car = static_cast<Car>(ahead - o.cars.data());
-  const SafetyMargins& m = scene.safe_distance;
-  const SafeDistance* d = car == Car::Leader   ? &m.leader
-                          : car == Car::Target ? &m.target
-                                               : &m.follower;
-  return Followed{car, d};
+  const auto ahead = planner::car_ahead(o, target_lane);
+  if (!ahead) return std::nullopt;
+  const SafetyMargins m = scene.centre_safe_distances();
+  const SafeDistance& d = ahead->car == Car::Leader   ? m.leader
+                          : ahead->car == Car::Target ? m.target
+                                                      : m.follower;
+  return Followed{ahead->car, d};
 }
 
 // Werling's cost of each axis: jerk, duration and the end's deviation.
@@ -117,7 +116,7 @@ std::vector<FrenetCandidate> lattice_candidates(const planner::Observation& o, d
       if (const auto f = followed_car(o, d1)) {
         const double v_car = cars.car(f->car).v[node];
         const double x_end =
-            cars.car(f->car).x[node] - f->distance->standstill - f->distance->time_headway * v_car;
+            cars.car(f->car).x[node] - f->distance.standstill - f->distance.time_headway * v_car;
         if (x_end > lon0.p) lons.push_back(Polynomial::quintic(lon0, {x_end, v_car, 0.0}, t));
       }
       for (const Polynomial& lon : lons) {

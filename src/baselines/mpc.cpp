@@ -68,7 +68,7 @@ void add_terminal_gap(MpcProblemData& data, const Scenario& scene, const Traffic
   const std::size_t end = static_cast<std::size_t>(data.steps);
   const CarTrack& follower = cars.car(Car::Follower);
   const CarTrack& target = cars.car(Car::Target);
-  const SafetyMargins& safe = scene.safe_distance;
+  const SafetyMargins safe = scene.centre_safe_distances();
   data.terminal_gap = true;
   data.gap_rear =
       follower.x[end] + safe.follower.standstill + safe.follower.time_headway * follower.v[end];
@@ -178,7 +178,7 @@ namespace {
 // set's centre, so the cold start is not far from the rows it must meet.
 double accel_into_gap(const Scenario& scene) {
   const double t = scene.horizon;
-  const SafetyMargins& safe = scene.safe_distance;
+  const SafetyMargins safe = scene.centre_safe_distances();
   const CarState& f = scene.follower;
   const CarState& g = scene.target;
   const double rear = f.x + f.v * t + safe.follower.standstill + safe.follower.time_headway * f.v;

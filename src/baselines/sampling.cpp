@@ -23,9 +23,6 @@ double min_separation(std::span<const EgoState> path, const TrafficPrediction& c
                       const Scenario& scene, double cap) {
   const double length = scene.vehicle.length;
   const double width = scene.vehicle.width;
-  // Two boxes whose centres are further apart than their circumscribed
-  // circles plus the cap cannot come closer than the cap.
-  const double reach = std::hypot(length, width) + cap;
   const int nodes = std::min(static_cast<int>(path.size()), cars.nodes());
   double closest = cap;
   for (int k = 0; k < nodes; ++k) {
@@ -34,8 +31,13 @@ double min_separation(std::span<const EgoState> path, const TrafficPrediction& c
     for (const Car c : kAllCars) {
       const double x = cars.car(c).x[static_cast<std::size_t>(k)];
       const double y = scene.lane_center(c);
+      const VehicleSize size = scene.size_of(c);
+      // Two boxes whose centres are further apart than their circumscribed
+      // circles plus the cap cannot come closer than the cap.
+      const double reach =
+          0.5 * (std::hypot(length, width) + std::hypot(size.length, size.width)) + cap;
       if (std::hypot(x - e.x, y - e.y) > reach) continue;
-      closest = std::min(closest, -overlap_depth(ego, {x, y, 0.0, length, width}));
+      closest = std::min(closest, -overlap_depth(ego, {x, y, 0.0, size.length, size.width}));
     }
   }
   return closest;
@@ -44,6 +46,7 @@ double min_separation(std::span<const EgoState> path, const TrafficPrediction& c
 bool keeps_target_lane_distances(std::span<const EgoState> path, const TrafficPrediction& cars,
                                  const Scenario& scene, bool follower_target_gap) {
   const int nodes = std::min(static_cast<int>(path.size()), cars.nodes());
+  const SafetyMargins margins = scene.centre_safe_distances();
   for (int k = 1; k < nodes; ++k) {
     const EgoState& e = path[static_cast<std::size_t>(k)];
     if (!body_in_lane(e.y, scene.vehicle.width, scene.lane_width, scene.lane_width)) continue;
@@ -52,8 +55,7 @@ bool keeps_target_lane_distances(std::span<const EgoState> path, const TrafficPr
       const double ahead_by = cars.car(c).x[i] - e.x;
       // The expert's side: the follower behind the ego, the target ahead.
       if (follower_target_gap && (c == Car::Follower) != (ahead_by < 0)) return false;
-      const SafeDistance& d =
-          c == Car::Follower ? scene.safe_distance.follower : scene.safe_distance.target;
+      const SafeDistance& d = c == Car::Follower ? margins.follower : margins.target;
       const double needed =
           d.standstill + d.time_headway * (ahead_by >= 0 ? e.v : cars.car(c).v[i]);
       if (std::abs(ahead_by) < needed) return false;

@@ -26,7 +26,8 @@ std::optional<Collision> first_collision(std::span<const EgoState> ego,
       for (Car car : kAllCars) {
         const CarTrack& track = others.car(car);
         const double x = lerp(track.x[k], track.x[std::min(k + 1, nodes - 1)], s);
-        if (boxes_collide(ego_box, {x, scenario.lane_center(car), 0.0, length, width})) {
+        const VehicleSize size = scenario.size_of(car);
+        if (boxes_collide(ego_box, {x, scenario.lane_center(car), 0.0, size.length, size.width})) {
           return Collision{k, (k + s) * others.dt, car};
         }
       }

@@ -69,7 +69,7 @@ struct CarRows {
 };
 
 CarRows car_rows(const Scenario& s, const TrafficPrediction& p, int index) {
-  const SafetyMargins& d = s.safe_distance;
+  const SafetyMargins d = s.centre_safe_distances();
   const double follower_v = p.car(Car::Follower).v[index];
   return {row(1.0, 0.0, d.leader.time_headway, p.car(Car::Leader).x[index] - d.leader.standstill),
           row(-1.0, 0.0, 0.0,
@@ -103,7 +103,7 @@ std::vector<LaneMode> lane_modes(const CarRows& r, LaneRule rule, double boundar
 double terminal_aim(const Scenario& s, const Config& c, const TrafficPrediction& p) {
   const CarTrack& target = p.car(Car::Target);
   if (!c.expert.aim_behind_target) return target.x.back();
-  const SafeDistance& d = s.safe_distance.target;
+  const SafeDistance d = s.centre_safe_distances().target;
   const double ego_speed = std::min(target.v.back(), s.limits.v.hi);
   return target.x.back() - d.standstill - d.time_headway * ego_speed;
 }

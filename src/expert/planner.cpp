@@ -307,7 +307,7 @@ std::string start_inside_safe_distance(const Scenario& s) {
                   needed);
     return std::string(text);
   };
-  const SafetyMargins& d = s.safe_distance;
+  const SafetyMargins d = s.centre_safe_distances();
   const double to_leader = s.leader.x - s.ego.x;
   const double leader_needs = d.leader.standstill + d.leader.time_headway * s.ego.v;
   if (in_ego_lane && to_leader >= 0 && to_leader < leader_needs) {

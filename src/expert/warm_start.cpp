@@ -46,7 +46,7 @@ Iterate quintic_warm_start(const Scenario& s, const Config& c, const TrafficPred
   const int end = std::min(s.steps, p.nodes() - 1);
   double aim = target.x[end];
   if (c.expert.aim_behind_target) {
-    const SafeDistance& d = s.safe_distance.target;
+    const SafeDistance d = s.centre_safe_distances().target;
     aim -= d.standstill + d.time_headway * std::min(target.v[end], s.limits.v.hi);
   }
   const double end_speed = std::clamp(target.v[end], s.limits.v.lo, s.limits.v.hi);

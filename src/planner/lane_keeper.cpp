@@ -18,7 +18,7 @@ std::string_view to_string(ActStatus status) {
 }
 
 EgoControl LaneKeeper::control(const EgoState& ego, double lane_center,
-                               const CarState* ahead) const {
+                               const std::optional<CarAhead>& ahead) const {
   const ClosedLoopSettings& c = config_.closed_loop;
   // The traffic's own IDM, so the ego follows as the other cars do; its
   // desired speed is the ego's speed limit at most.
@@ -27,9 +27,10 @@ EgoControl LaneKeeper::control(const EgoState& ego, double lane_center,
   const double speed = std::max(0.0, ego.v * std::cos(ego.theta));
   double gap = std::numeric_limits<double>::infinity();
   double ahead_speed = speed;
-  if (ahead != nullptr && ahead->x > ego.x) {
-    gap = std::max(0.01, ahead->x - ego.x - config_.vehicle.length);
-    ahead_speed = ahead->v;
+  if (ahead && ahead->state.x > ego.x) {
+    const double centres = 0.5 * (config_.vehicle.length + ahead->length);
+    gap = std::max(0.01, ahead->state.x - ego.x - centres);
+    ahead_speed = ahead->state.v;
   }
   EgoControl out;
   out.a = idm_acceleration(idm, speed, gap, ahead_speed);
@@ -42,13 +43,16 @@ EgoControl LaneKeeper::control(const EgoState& ego, double lane_center,
   return out;
 }
 
-const CarState* car_ahead(const Observation& o, bool target_lane) {
-  if (!target_lane) return &o.car(Car::Leader);
+std::optional<CarAhead> car_ahead(const Observation& o, bool target_lane) {
+  const auto ahead = [&o](Car car) {
+    return CarAhead{car, o.car(car), o.scene->size_of(car).length};
+  };
+  if (!target_lane) return ahead(Car::Leader);
   // In the target lane the follower may be ahead once the ego fell behind it.
-  const CarState* best = nullptr;
+  std::optional<CarAhead> best;
   for (const Car car : {Car::Follower, Car::Target}) {
     const CarState& c = o.car(car);
-    if (c.x > o.ego.x && (best == nullptr || c.x < best->x)) best = &c;
+    if (c.x > o.ego.x && (!best || c.x < best->state.x)) best = ahead(car);
   }
   return best;
 }
@@ -60,7 +64,7 @@ namespace {
 // measured by the follower's rule, the car ahead by the target's (or, in the
 // ego lane, the leader's).
 double lane_margin(const Observation& o, bool target_lane) {
-  const SafetyMargins& d = o.scene->safe_distance;
+  const SafetyMargins d = o.scene->centre_safe_distances();
   const EgoState& ego = o.ego;
   if (!target_lane) {
     const CarState& leader = o.car(Car::Leader);

@@ -163,7 +163,7 @@ namespace {
 std::string too_close_in_target_lane(const Observation& o, const Scenario& scene) {
   const double w = scene.lane_width;
   if (o.ego.y + scene.vehicle.width / 2.0 <= w / 2.0) return "";
-  const SafetyMargins& d = scene.safe_distance;
+  const SafetyMargins d = scene.centre_safe_distances();
   const CarState& follower = o.car(Car::Follower);
   const CarState& target = o.car(Car::Target);
   // The gap is the one between the follower and the target: behind the

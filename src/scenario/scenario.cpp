@@ -46,6 +46,22 @@ const CarState& Scenario::car(Car which) const {
   return leader;
 }
 
+VehicleSize Scenario::size_of(Car which) const {
+  return car_size[static_cast<std::size_t>(which)].value_or(vehicle);
+}
+
+double Scenario::bumper_gap(Car which, double dx) const {
+  return std::abs(dx) - 0.5 * (vehicle.length + size_of(which).length);
+}
+
+SafetyMargins Scenario::centre_safe_distances() const {
+  SafetyMargins d = safe_distance;
+  d.leader.standstill += 0.5 * (size_of(Car::Leader).length - vehicle.length);
+  d.follower.standstill += 0.5 * (size_of(Car::Follower).length - vehicle.length);
+  d.target.standstill += 0.5 * (size_of(Car::Target).length - vehicle.length);
+  return d;
+}
+
 CarState& Scenario::car(Car which) {
   return const_cast<CarState&>(static_cast<const Scenario&>(*this).car(which));
 }
@@ -118,12 +134,26 @@ EgoState read_ego(const json& root) {
 
 CarState read_car(const json& root, const char* name, bool accel_required) {
   const json& j = require_object(root, name);
-  reject_unknown_keys(j, name, {"x", "v", "a"});
+  reject_unknown_keys(j, name, {"x", "v", "a", "length", "width"});
   CarState c;
   c.x = read_number(j, name, "x", true, 0.0);
   c.v = read_number(j, name, "v", true, 0.0);
   c.a = read_number(j, name, "a", accel_required, 0.0);
   return c;
+}
+
+// Optional and together: a body is a length and a width. The other one
+// defaults to `vehicle`'s, known only once the whole scene is read.
+std::optional<VehicleSize> read_car_size(const json& root, const char* name,
+                                         const VehicleSize& vehicle) {
+  const json& j = root.at(name);
+  const bool has_length = j.contains("length");
+  const bool has_width = j.contains("width");
+  if (!has_length && !has_width) return std::nullopt;
+  VehicleSize size = vehicle;
+  if (has_length) size.length = read_number(j, name, "length", true, 0.0);
+  if (has_width) size.width = read_number(j, name, "width", true, 0.0);
+  return size;
 }
 
 // formats.md gives each safe distance as one number of metres; we also take
@@ -163,10 +193,19 @@ void read_optional_fields(const json& root, Scenario& s) {
   }
 }
 
-json car_to_json(const CarState& c) { return {{"x", c.x}, {"v", c.v}, {"a", c.a}}; }
+json car_to_json(const Scenario& s, Car car) {
+  const CarState& c = s.car(car);
+  json out = {{"x", c.x}, {"v", c.v}, {"a", c.a}};
+  if (const auto& size = s.car_size[static_cast<std::size_t>(car)]) {
+    out["length"] = size->length;
+    out["width"] = size->width;
+  }
+  return out;
+}
 
 OrientedBox box_of(const Scenario& s, Car car) {
-  return {s.car(car).x, s.lane_center(car), 0.0, s.vehicle.length, s.vehicle.width};
+  const VehicleSize size = s.size_of(car);
+  return {s.car(car).x, s.lane_center(car), 0.0, size.length, size.width};
 }
 
 void require(bool ok, const std::string& field, const std::string& problem) {
@@ -179,7 +218,12 @@ void validate_scenario(const Scenario& s) {
   require(std::isfinite(s.lane_width) && s.lane_width > 0, "lane_width", "must be positive");
   require(s.ego.v >= 0, "ego.v", "speed must not be negative");
   for (Car car : kAllCars) {
-    require(s.car(car).v >= 0, std::string(to_string(car)) + ".v", "speed must not be negative");
+    const std::string name(to_string(car));
+    require(s.car(car).v >= 0, name + ".v", "speed must not be negative");
+    const VehicleSize size = s.size_of(car);
+    require(size.length > 0, name + ".length", "must be positive");
+    require(size.width > 0 && size.width < s.lane_width, name + ".width",
+            "must be positive and narrower than the lane");
   }
   require(s.horizon > 0, "horizon", "must be positive");
   require(s.steps >= 2 && s.steps <= 10000, "steps", "must be in [2, 10000]");
@@ -221,6 +265,10 @@ Scenario scenario_from_json(const json& root, const Config& defaults) {
   s.follower = read_car(root, "follower", accel_required);
   s.target = read_car(root, "target", accel_required);
   read_optional_fields(root, s);
+  for (Car car : kAllCars) {
+    const std::string name(to_string(car));
+    s.car_size[static_cast<std::size_t>(car)] = read_car_size(root, name.c_str(), s.vehicle);
+  }
   validate_scenario(s);
   effective_config(defaults, s).validate();
   return s;
@@ -241,9 +289,9 @@ json scenario_to_json(const Scenario& s) {
   out["behavior"] = to_string(s.behavior);
   out["ego"] = {
       {"x", s.ego.x}, {"y", s.ego.y}, {"v", s.ego.v}, {"theta", s.ego.theta}, {"a", s.ego.a}};
-  out["leader"] = car_to_json(s.leader);
-  out["follower"] = car_to_json(s.follower);
-  out["target"] = car_to_json(s.target);
+  out["leader"] = car_to_json(s, Car::Leader);
+  out["follower"] = car_to_json(s, Car::Follower);
+  out["target"] = car_to_json(s, Car::Target);
   out["horizon"] = s.horizon;
   out["steps"] = s.steps;
   out["vehicle"] = detail::write_value(s.vehicle);

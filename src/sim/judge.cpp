@@ -63,7 +63,7 @@ void traffic_measures(const Trajectory& t, const Scenario& scene, RolloutMetrics
       }
       const CarTrack& track = t.others.car(c);
       const double dx = track.x[static_cast<std::size_t>(k)] - e.x;
-      const double gap = std::abs(dx) - scene.vehicle.length;
+      const double gap = scene.bumper_gap(c, dx);
       m.min_gap = std::min(m.min_gap, gap);
       const double car_speed = track.v[static_cast<std::size_t>(k)];
       const double closing = dx > 0 ? ego_speed - car_speed : car_speed - ego_speed;

@@ -50,6 +50,8 @@ TrafficModel::TrafficModel(const Scenario& scenario, const Config& config)
       idm_(scenario.idm),
       speed_cap_(config.traffic_max_speed.value_or(std::numeric_limits<double>::infinity())),
       integration_(config.traffic_integration),
+      length_{scenario.size_of(Car::Leader).length, scenario.size_of(Car::Follower).length,
+              scenario.size_of(Car::Target).length},
       cars_{scenario.leader, scenario.follower, scenario.target} {
   if (behavior_ == Behavior::ConstantSpeed) {
     for (auto& c : cars_) c.a = 0.0;
@@ -61,8 +63,8 @@ double TrafficModel::idm_accel_of(Car which, const EgoFootprint& ego) const {
   const double my_lane = which == Car::Leader ? 0.0 : lane_width_;
   double gap = std::numeric_limits<double>::infinity();
   double leader_speed = me.v;
-  auto consider = [&](double x, double v) {
-    const double g = x - me.x - vehicle_.length;
+  auto consider = [&](double x, double v, double length) {
+    const double g = x - me.x - 0.5 * (length_[index(which)] + length);
     if (x > me.x && g < gap) {
       gap = g;
       leader_speed = v;
@@ -70,10 +72,12 @@ double TrafficModel::idm_accel_of(Car which, const EgoFootprint& ego) const {
   };
   for (Car other : kAllCars) {
     const double other_lane = other == Car::Leader ? 0.0 : lane_width_;
-    if (other != which && other_lane == my_lane) consider(car(other).x, car(other).v);
+    if (other != which && other_lane == my_lane) {
+      consider(car(other).x, car(other).v, length_[index(other)]);
+    }
   }
   if (body_in_lane(ego.y, vehicle_.width, my_lane, lane_width_)) {
-    consider(ego.x, ego.v);
+    consider(ego.x, ego.v, vehicle_.length);
   }
   return idm_acceleration(idm_, me.v, gap, leader_speed);
 }

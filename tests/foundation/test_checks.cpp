@@ -94,5 +94,24 @@ TEST(Collision, FindsTheFirstContactWithAPredictedCar) {
   EXPECT_FALSE(first_collision(ego, clear, s).has_value());
 }
 
+TEST(Collision, ACarsOwnSizeDecidesContact) {
+  Scenario s = scenario_from_json(testing::example_scenario_json(), Config{});
+  s.leader = {20.0, 0.0, 0.0};
+  s.car_size[static_cast<std::size_t>(Car::Leader)] = VehicleSize{12.0, 2.5};  // a truck
+  const TrafficPrediction others = predict_traffic(s, Config{}, 20, 0.1);
+  std::vector<EgoState> ego;
+  for (int k = 0; k <= 20; ++k) ego.push_back({10.0 * k * 0.1, 0.0, 10.0, 0.0, 0.0});
+  // Centres 0.5 (4.4 + 12) = 8.2 m apart at contact: after 1.18 s, not 1.56 s.
+  const auto hit = first_collision(ego, others, s);
+  ASSERT_TRUE(hit.has_value());
+  EXPECT_NEAR(hit->time, 1.18, 0.03);
+  // Passing beside it, off its lane's centre: a wider body reaches further.
+  const double beside = 0.5 * (s.vehicle.width + 2.5) - 0.05;
+  for (auto& e : ego) e.y = beside;
+  EXPECT_TRUE(first_collision(ego, others, s).has_value());
+  s.car_size[static_cast<std::size_t>(Car::Leader)].reset();
+  EXPECT_FALSE(first_collision(ego, predict_traffic(s, Config{}, 20, 0.1), s).has_value());
+}
+
 }  // namespace
 }  // namespace lanechange

@@ -66,6 +66,48 @@ TEST(Scenario, RoundTripsThroughJson) {
   EXPECT_DOUBLE_EQ(again.leader.a, 0.3);
 }
 
+// Recorded traffic mixes trucks and cars: each car may carry its own body.
+TEST(Scenario, ACarMayCarryItsOwnSizeAndKeepsItThroughJson) {
+  json j = example_scenario_json();
+  j["leader"]["length"] = 12.0;
+  j["leader"]["width"] = 2.5;
+  j["target"]["length"] = 6.0;  // the width then is the vehicle's
+  const Scenario s = scenario_from_json(j, Config{});
+  EXPECT_DOUBLE_EQ(s.size_of(Car::Leader).length, 12.0);
+  EXPECT_DOUBLE_EQ(s.size_of(Car::Leader).width, 2.5);
+  EXPECT_DOUBLE_EQ(s.size_of(Car::Target).length, 6.0);
+  EXPECT_DOUBLE_EQ(s.size_of(Car::Target).width, s.vehicle.width);
+  EXPECT_DOUBLE_EQ(s.size_of(Car::Follower).length, s.vehicle.length);
+  const json written = scenario_to_json(s);
+  EXPECT_DOUBLE_EQ(written["leader"]["length"].get<double>(), 12.0);
+  EXPECT_FALSE(written["follower"].contains("length"));  // absent stays absent
+  EXPECT_EQ(scenario_to_json(scenario_from_json(written, Config{})), written);
+  // Bumper gaps and Eq. 1's centre distances count each car's half length.
+  EXPECT_DOUBLE_EQ(s.bumper_gap(Car::Leader, 20.0), 20.0 - 0.5 * (s.vehicle.length + 12.0));
+  EXPECT_DOUBLE_EQ(s.centre_safe_distances().leader.standstill,
+                   s.safe_distance.leader.standstill + 0.5 * (12.0 - s.vehicle.length));
+  EXPECT_DOUBLE_EQ(s.centre_safe_distances().follower.standstill,
+                   s.safe_distance.follower.standstill);
+}
+
+TEST(ScenarioBadInput, ACarSizeOutOfRangeIsNamed) {
+  json j = example_scenario_json();
+  j["leader"]["width"] = 9.0;  // wider than the lane
+  expect_rejected(j, "leader.width");
+  json k = example_scenario_json();
+  k["target"]["length"] = 0.0;
+  expect_rejected(k, "target.length");
+  json l = example_scenario_json();
+  l["follower"]["length"] = "long";
+  expect_rejected(l, "follower.length");
+  // A longer leader reaches back to the ego: an overlap at t = 0.
+  json m = example_scenario_json();
+  m["leader"]["x"] = m["ego"]["x"].get<double>() + 6.0;
+  EXPECT_NO_THROW((void)scenario_from_json(m, Config{}));
+  m["leader"]["length"] = 9.0;
+  expect_rejected(m, "leader.x");
+}
+
 TEST(ScenarioBadInput, NotJson) {
   EXPECT_THROW((void)scenario_from_text("{\"lane_width\": 3.5,", Config{}), InputError);
   EXPECT_THROW((void)scenario_from_text("[1, 2]", Config{}), InputError);

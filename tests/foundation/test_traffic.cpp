@@ -85,6 +85,19 @@ TEST(Idm, FollowerReactsToTheEgoOnlyOnceItsBodyIsInTheLane) {
   EXPECT_FALSE(body_in_lane(s.lane_width / 2.0 - 0.86, 1.7, s.lane_width, s.lane_width));
 }
 
+TEST(Idm, ALongerCarAheadLeavesAShorterGapAndBrakesItsFollower) {
+  Scenario s = two_lane_scene(Behavior::Idm);
+  const Config config;
+  const EgoFootprint far_away{-1000.0, 0.0, 0.0};
+  TrafficModel cars(s, config);
+  cars.step(0.1, far_away);
+  s.car_size[static_cast<std::size_t>(Car::Target)] = VehicleSize{12.0, 2.5};
+  TrafficModel behind_a_truck(s, config);
+  behind_a_truck.step(0.1, far_away);
+  EXPECT_LT(behind_a_truck.car(Car::Follower).a, cars.car(Car::Follower).a);
+  EXPECT_DOUBLE_EQ(behind_a_truck.car(Car::Target).a, cars.car(Car::Target).a);
+}
+
 TEST(ConstantAccel, ClampsAtZeroWithExactPosition) {
   CarState car{0.0, 2.0, -1.0};
   advance_constant_accel(car, 5.0, 20.0);

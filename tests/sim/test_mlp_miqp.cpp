@@ -51,7 +51,7 @@ TEST(MlpMiqp, ANetworkThatDrivesWellIsNotOverruled) {
   const Config config = testing::untimed_config();
   const planner::LaneKeeper keeper(config);
   const MlpMiqpPlanner p = forced([&keeper](const Observation& o) {
-    return keeper.control(o.ego, o.scene->lane_width, nullptr);
+    return keeper.control(o.ego, o.scene->lane_width, std::nullopt);
   });
   const Scenario s = testing::open_road_scenario();
   const sim::Rollout r = sim::simulate(s, p, config);

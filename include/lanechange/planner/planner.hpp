@@ -6,6 +6,7 @@
 // and answers with a control and a status.
 #include <array>
 #include <memory>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -64,12 +65,19 @@ class ClosedLoopPlanner {
 /// the lane centre. It is the fallback of every planner (in the ego lane,
 /// behind the leader) and drives on once a lane change is over (in the
 /// target lane, behind the target). Pure and const.
+/// The car a lane keeper follows, with its length for the bumper gap.
+struct CarAhead {
+  Car car = Car::Leader;
+  CarState state;
+  double length = 0.0;
+};
+
 class LaneKeeper {
  public:
   explicit LaneKeeper(const Config& config) : config_(config) {}
   /// The control that keeps `lane_center`, behind `ahead` (none: free road).
   [[nodiscard]] EgoControl control(const EgoState& ego, double lane_center,
-                                   const CarState* ahead) const;
+                                   const std::optional<CarAhead>& ahead) const;
 
  private:
   Config config_;
@@ -77,7 +85,7 @@ class LaneKeeper {
 
 /// The car ahead of the ego in a lane: the leader in the ego lane, the
 /// target in the target lane (the follower once the ego is behind it).
-[[nodiscard]] const CarState* car_ahead(const Observation& observation, bool target_lane);
+[[nodiscard]] std::optional<CarAhead> car_ahead(const Observation& observation, bool target_lane);
 
 /// Whether the fallback keeps to the target lane: once the ego's centre is
 /// over the line (turning back from there is the riskier move), unless the
