@@ -126,9 +126,10 @@ RoundRow evaluate(const DaggerOptions& o, const std::string& planner, const std:
   (void)sim::evaluate(e, run);
   RoundRow row = score((fs::path(e.out_dir) / "rollouts.csv").string(), planner, round);
   if (progress != nullptr) {
-    *progress << "dagger: round " << round << ", " << planner << ": success " << row.success_rate
-              << ", take-overs per rollout " << row.takeovers_per_rollout << ", collisions "
-              << row.collision_rate << std::endl;
+    *progress << "dagger: "
+              << (round < 0 ? std::string("reference") : "round " + std::to_string(round)) << ", "
+              << planner << ": success " << row.success_rate << ", take-overs per rollout "
+              << row.takeovers_per_rollout << ", collisions " << row.collision_rate << std::endl;
   }
   return row;
 }

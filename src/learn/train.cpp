@@ -353,6 +353,24 @@ void write_model_files(Context& c) {
   lanechange::detail::write_file_atomically((c.dir / kModelFile).string(), c.model.dump(2));
 }
 
+// Fills the staging directory, completes it and publishes it; a failure
+// removes it and leaves any old model where it stood.
+template <class Fill>
+TrainReport build_and_publish(Context& c, const fs::path& out, Clock::time_point start,
+                              Fill&& fill) {
+  try {
+    fill();
+    write_model_files(c);
+    publish(c.dir, out);
+  } catch (...) {
+    std::error_code ignored;
+    fs::remove_all(c.dir, ignored);
+    throw;
+  }
+  c.say("wrote " + out.string());
+  return {c.metrics, seconds_since(start)};
+}
+
 }  // namespace
 
 json TrainOptions::config() const {
@@ -384,7 +402,7 @@ TrainReport train_models(const TrainOptions& options) {
   const auto [out, staging] = staging_for(options.out_dir);
   fs::create_directories(staging);
   Context c{options, data, split, Seeds(options.seed), staging, json::object(), json::object()};
-  try {
+  return build_and_publish(c, out, start, [&] {
     c.say("read " + std::to_string(data.scenarios.rows()) + " scenarios and " +
           std::to_string(data.samples.rows()) + " well-posed samples from " +
           std::to_string(data.datasets.size()) + " data set(s)");
@@ -404,15 +422,7 @@ TrainReport train_models(const TrainOptions& options) {
     train_strategy(c);
     c.metrics["wall_s"] = seconds_since(start);
     describe_model(c);
-    write_model_files(c);
-    publish(staging, out);
-  } catch (...) {
-    std::error_code ignored;
-    fs::remove_all(staging, ignored);
-    throw;
-  }
-  c.say("wrote " + out.string());
-  return {c.metrics, seconds_since(start)};
+  });
 }
 
 namespace {
@@ -453,24 +463,17 @@ TrainReport retrain_network(const RetrainOptions& options) {
   train.plots = options.plots;
   train.progress = options.progress;
   const auto [out, staging] = staging_for(options.out_dir);
-  fs::copy(options.base_model, staging, fs::copy_options::recursive);
-  json metrics = lanechange::detail::read_json_file((staging / "metrics.json").string());
+  const json metrics =
+      lanechange::detail::read_json_file((fs::path(options.base_model) / "metrics.json").string());
   Context c{train, data, split, Seeds(train.seed), staging, base, metrics};
-  try {
+  return build_and_publish(c, out, start, [&] {
+    fs::copy(options.base_model, staging, fs::copy_options::recursive);
     train_action_network(c);
     c.model["data"] = describe_data(c);
     c.model["retrained_network"] = {{"base_model", options.base_model}, {"note", options.note}};
     c.metrics["data"]["samples_network"] = data.samples.rows();
     c.metrics["wall_s_retrain"] = seconds_since(start);
-    write_model_files(c);
-    publish(staging, out);
-  } catch (...) {
-    std::error_code ignored;
-    fs::remove_all(staging, ignored);
-    throw;
-  }
-  c.say("wrote " + out.string());
-  return {c.metrics, seconds_since(start)};
+  });
 }
 
 }  // namespace lanechange::learn

@@ -118,10 +118,23 @@ TEST_F(DaggerCli, OneRoundAddsLabelsAsAValidDataSetAndTabulatesEachRound) {
   EXPECT_EQ(table[2][0], "1");
   EXPECT_EQ(std::stoll(table[2][7]), after.samples.rows() - before.samples.rows());
 
-  // --out holds the last round's model: its network was retrained.
+  // --out holds the last round's model: a new network, the base's classifiers.
   const learn::Model model = learn::Model::load(dir_.file("model"));
+  const learn::Model base = learn::Model::load(work + "/model-0");
   EXPECT_TRUE(model.description().contains("retrained_network"));
   EXPECT_EQ(model.description()["data"]["datasets"].size(), 2U);
+  const auto& files = model.description()["files"];
+  const auto& base_files = base.description()["files"];
+  EXPECT_EQ(files["classifiers/plain/svm.libsvm"], base_files["classifiers/plain/svm.libsvm"]);
+  EXPECT_NE(files["policy.json"], base_files["policy.json"]);
+
+  // The same command again finds every step done and tabulates the same.
+  const std::string csv = testing::read_text(work + "/dagger.csv");
+  const auto again = train("--dagger 1 --dagger-dir " + work +
+                           " --dagger-scenes 8 --dagger-stride 2 --dagger-eval-count 6");
+  ASSERT_EQ(again.exit_code, 0) << again.output;
+  EXPECT_EQ(again.output.find("expert queries"), std::string::npos) << again.output;
+  EXPECT_EQ(testing::read_text(work + "/dagger.csv"), csv);
 }
 
 TEST_F(DaggerCli, BadOptionsAreRefusedAndWriteNothing) {
