@@ -7,6 +7,7 @@
 #include <atomic>
 #include <thread>
 
+#include "lanechange/data/progress.hpp"
 #include "lanechange/sampler.hpp"
 #include "lanechange/sim/simulator.hpp"
 #include "planner/miqp_planner.hpp"
@@ -90,17 +91,22 @@ RoundData collect_round(const CollectJob& job, const std::string& dir, long long
   const ScenarioSampler sampler(job.config, job.scene_seed);
   std::vector<std::vector<Query>> per_scene(static_cast<std::size_t>(job.scenes));
   std::atomic<long long> next{0};
+  data::Progress progress(job.progress, false, job.scenes, -1.0, "dagger", "learner rollouts");
   auto work = [&] {
     for (long long i = next++; i < job.scenes; i = next++) {
       const Scenario scene = sampler.sample(static_cast<std::uint64_t>(job.first_scene + i));
       per_scene[static_cast<std::size_t>(i)] =
           collect_scene(scene, job.learner, job.config, job.stride, job.time_limit_s);
+      progress.add(1);
     }
   };
+  const int jobs =
+      job.jobs > 0 ? job.jobs : std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
   std::vector<std::thread> threads;
-  for (int t = 1; t < std::max(1, job.jobs); ++t) threads.emplace_back(work);
+  for (int t = 1; t < jobs; ++t) threads.emplace_back(work);
   work();
   for (std::thread& t : threads) t.join();
+  progress.finish();
 
   RoundData out;
   out.range = {shard, first_index, 0};

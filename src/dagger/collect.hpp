@@ -1,6 +1,7 @@
 #pragma once
 // DAgger's data collection: the learner drives, the expert labels.
 #include <cstdint>
+#include <ostream>
 #include <string>
 #include <vector>
 
@@ -42,6 +43,7 @@ struct CollectJob {
   int stride = 1;
   double time_limit_s = 60.0;
   int jobs = 1;
+  std::ostream* progress = nullptr;  ///< one line every few seconds (none if null)
 };
 [[nodiscard]] RoundData collect_round(const CollectJob& job, const std::string& dir,
                                       long long shard, long long first_index);

@@ -184,7 +184,8 @@ void add_round(Aggregate& a, const DaggerOptions& o, int round, std::ostream* pr
                                         std::make_shared<expert::FastLaneChangeSolver>());
   fs::create_directories(data_dir(o));
   const detail::CollectJob job{learner,  o.config, o.scene_seed,         (round - 1) * o.scenes,
-                               o.scenes, o.stride, o.label_time_limit_s, o.jobs};
+                               o.scenes, o.stride, o.label_time_limit_s, o.jobs,
+                               progress};
   const detail::RoundData got = detail::collect_round(job, data_dir(o), round - 1, a.count());
   a.shards.push_back(got.range);
   a.labelled.push_back(got.labelled);
@@ -196,7 +197,9 @@ void add_round(Aggregate& a, const DaggerOptions& o, int round, std::ostream* pr
                                               {"first_scene", job.first_scene},
                                               {"well_posed_labels", got.labelled}});
   a.parameters["count"] = a.count();
-  const json run = {{"host", "local"}, {"jobs", o.jobs}};
+  char host[256] = {};
+  (void)::gethostname(host, sizeof host - 1);
+  const json run = {{"host", host}, {"ranks", 1}, {"jobs_per_rank", o.jobs}};
   data::detail::write_manifest_of_shards(data_dir(o), a.parameters, run, a.shards);
   if (progress != nullptr) {
     *progress << "dagger: round " << round << ": " << got.range.count << " expert queries, "
