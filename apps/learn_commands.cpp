@@ -86,6 +86,8 @@ void add_dagger_options(CLI::App& cmd, TrainArgs& a) {
       cmd.add_option("--dagger-scenes", d.scenes, "Training scenes rolled out per round"),
       cmd.add_option("--dagger-seed", d.scene_seed, "Sampler seed of those scenes"),
       cmd.add_option("--dagger-stride", d.stride, "The expert labels every k-th step"),
+      cmd.add_option("--dagger-label-nodes", d.label_nodes,
+                     "Nodes kept of each expert plan, from the visited state (0: all)"),
       cmd.add_option("--dagger-eval-count", d.eval_count, "Held-out scenes per evaluation"),
       cmd.add_option("--dagger-eval-seed", d.eval_seed, "Sampler seed of the held-out scenes")};
 }

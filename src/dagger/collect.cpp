@@ -16,72 +16,72 @@ namespace lanechange::dagger::detail {
 
 namespace {
 
-// The observation's time and state are node 0 of the plan from now; only
-// the time has to be moved from the plan's clock to the rollout's.
-Query first_node(data::detail::PlanOutcome outcome, double t) {
+// Node 0 of the plan from now is the observation's state; the plan's clock
+// starts there, so its times move by the rollout's.
+Query first_nodes(data::detail::PlanOutcome outcome, double t, int nodes) {
   Trajectory& path = outcome.trajectory;
-  if (path.nodes() > 0) {
-    path.t.resize(1);
-    path.ego.resize(1);
-    path.controls.resize(1);
-    path.t[0] = t;
-    outcome.lane_modes.resize(std::min<std::size_t>(outcome.lane_modes.size(), 1));
+  if (nodes > 0 && path.nodes() > nodes) {
+    const auto keep = static_cast<std::size_t>(nodes);
+    path.t.resize(keep);
+    path.ego.resize(keep);
+    path.controls.resize(keep);
+    outcome.lane_modes.resize(std::min(outcome.lane_modes.size(), keep));
   }
+  for (double& time : path.t) time += t;
   return {std::move(outcome)};
 }
 
 class LearnerSession final : public planner::PlannerSession {
  public:
-  LearnerSession(const planner::MlpMiqpPlanner& learner, int stride, double time_limit_s,
+  LearnerSession(const planner::MlpMiqpPlanner& learner, const Labelling& labelling,
                  std::vector<Query>& sink)
-      : learner_(learner), stride_(stride), time_limit_s_(time_limit_s), sink_(sink) {}
+      : learner_(learner), labelling_(labelling), sink_(sink) {}
 
   [[nodiscard]] planner::Decision act(const planner::Observation& o) override {
-    if (o.step % stride_ == 0) {
+    if (o.step % labelling_.stride == 0) {
       // The call miqp's re-plan makes, from the scene as it is now, but
       // without a warm start: the learner's path is not the expert's.
       const Scenario now = planner::scene_now(o, learner_.config());
       sink_.push_back(
-          first_node(data::detail::plan_outcome(learner_.expert(), now, time_limit_s_), o.t));
+          first_nodes(data::detail::plan_outcome(learner_.expert(), now, labelling_.time_limit_s),
+                      o.t, labelling_.nodes));
     }
     return {learner_.network(o), planner::ActStatus::Planned, ""};
   }
 
  private:
   const planner::MlpMiqpPlanner& learner_;
-  int stride_;
-  double time_limit_s_;
+  const Labelling& labelling_;
   std::vector<Query>& sink_;
 };
 
 class LearnerPlanner final : public planner::ClosedLoopPlanner {
  public:
-  LearnerPlanner(const planner::MlpMiqpPlanner& learner, int stride, double time_limit_s,
+  LearnerPlanner(const planner::MlpMiqpPlanner& learner, const Labelling& labelling,
                  std::vector<Query>& sink)
-      : learner_(learner), stride_(stride), time_limit_s_(time_limit_s), sink_(sink) {}
+      : learner_(learner), labelling_(labelling), sink_(sink) {}
   [[nodiscard]] std::string_view name() const override { return "dagger-learner"; }
   [[nodiscard]] std::unique_ptr<planner::PlannerSession> start(
       const Scenario& /*scene*/) const override {
-    return std::make_unique<LearnerSession>(learner_, stride_, time_limit_s_, sink_);
+    return std::make_unique<LearnerSession>(learner_, labelling_, sink_);
   }
 
  private:
   const planner::MlpMiqpPlanner& learner_;
-  int stride_;
-  double time_limit_s_;
+  const Labelling& labelling_;
   std::vector<Query>& sink_;
 };
 
 }  // namespace
 
 std::vector<Query> collect_scene(const Scenario& scene, const planner::MlpMiqpPlanner& learner,
-                                 const Config& config, int stride, double time_limit_s) {
+                                 const Config& config, const Labelling& labelling) {
   // The expert's queries are labelling, not driving: they must never count
   // as an overrun that hands the step to the fallback.
   Config untimed = config;
   untimed.closed_loop.step_budget_ms = 1e12;
   std::vector<Query> queries;
-  const LearnerPlanner planner(learner, stride, time_limit_s, queries);
+  const LearnerPlanner planner(learner, labelling, queries);
   (void)sim::simulate(scene, planner, untimed);
   return queries;
 }
@@ -96,7 +96,7 @@ RoundData collect_round(const CollectJob& job, const std::string& dir, long long
     for (long long i = next++; i < job.scenes; i = next++) {
       const Scenario scene = sampler.sample(static_cast<std::uint64_t>(job.first_scene + i));
       per_scene[static_cast<std::size_t>(i)] =
-          collect_scene(scene, job.learner, job.config, job.stride, job.time_limit_s);
+          collect_scene(scene, job.learner, job.config, job.labelling);
       progress.add(1);
     }
   };
@@ -116,7 +116,10 @@ RoundData collect_round(const CollectJob& job, const std::string& dir, long long
     const Scenario scene = sampler.sample(scene_index);
     for (const Query& query : per_scene[static_cast<std::size_t>(i)]) {
       const auto index = static_cast<std::uint64_t>(first_index + out.range.count++);
-      out.labelled += query.outcome.label == Label::WellPosed ? 1 : 0;
+      if (query.outcome.label == Label::WellPosed) {
+        ++out.labelled;
+        out.samples += query.outcome.trajectory.nodes();
+      }
       files.write(data::detail::scenario_rows(index, scenario_seed(job.scene_seed, scene_index),
                                               scene, query.outcome));
     }

@@ -40,6 +40,7 @@ void validate(const DaggerOptions& o) {
   require(o.rounds >= 0 && o.rounds <= 100, "--dagger", "rounds must be in [0, 100]");
   require(o.scenes >= 1, "--dagger-scenes", "must be at least 1");
   require(o.stride >= 1, "--dagger-stride", "must be at least 1");
+  require(o.label_nodes >= 0, "--dagger-label-nodes", "must be at least 0 (0: whole plans)");
   require(o.eval_count >= 1, "--dagger-eval-count", "must be at least 1");
   require(o.eval_seed != o.scene_seed, "--dagger-eval-seed",
           "must differ from --dagger-seed: the evaluation scenes must be held out");
@@ -63,6 +64,7 @@ json run_parameters(const DaggerOptions& o) {
           {"scenes_per_round", o.scenes},
           {"scene_seed", o.scene_seed},
           {"stride", o.stride},
+          {"label_nodes", o.label_nodes},
           {"eval_count", o.eval_count},
           {"eval_seed", o.eval_seed},
           {"label_time_limit_s", o.label_time_limit_s},
@@ -140,6 +142,7 @@ struct Aggregate {
   json parameters;
   std::vector<data::detail::ShardRange> shards;
   std::vector<long long> labelled;
+  std::vector<long long> samples;  // well-posed rows
   [[nodiscard]] long long count() const {
     return shards.empty() ? 0 : shards.back().first + shards.back().count;
   }
@@ -160,8 +163,9 @@ Aggregate read_aggregate(const DaggerOptions& o) {
                   {"dagger",
                    {{"labels",
                      "the closed-loop expert (miqp's re-plan) from states the action "
-                     "network visits; one sample (node 0) per query"},
+                     "network visits; node 0 is the visited state"},
                     {"stride", o.stride},
+                    {"label_nodes", o.label_nodes},
                     {"scenes_per_round", o.scenes},
                     {"closed_loop_config", closed_loop},
                     {"shards", json::array()}}}};
@@ -172,6 +176,7 @@ Aggregate read_aggregate(const DaggerOptions& o) {
     a.shards.push_back({s.at("index").get<long long>(), s.at("first").get<long long>(),
                         s.at("count").get<long long>()});
     a.labelled.push_back(s.at("well_posed_labels").get<long long>());
+    a.samples.push_back(s.value("well_posed_samples", a.labelled.back()));
     a.parameters["dagger"]["shards"].push_back(s);
   }
   return a;
@@ -183,19 +188,22 @@ void add_round(Aggregate& a, const DaggerOptions& o, int round, std::ostream* pr
   const planner::MlpMiqpPlanner learner(o.config, model,
                                         std::make_shared<expert::FastLaneChangeSolver>());
   fs::create_directories(data_dir(o));
-  const detail::CollectJob job{learner,  o.config, o.scene_seed,         (round - 1) * o.scenes,
-                               o.scenes, o.stride, o.label_time_limit_s, o.jobs,
-                               progress};
+  const detail::CollectJob job{learner,      o.config,
+                               o.scene_seed, (round - 1) * o.scenes,
+                               o.scenes,     {o.stride, o.label_nodes, o.label_time_limit_s},
+                               o.jobs,       progress};
   const detail::RoundData got = detail::collect_round(job, data_dir(o), round - 1, a.count());
   a.shards.push_back(got.range);
   a.labelled.push_back(got.labelled);
+  a.samples.push_back(got.samples);
   a.parameters["dagger"]["shards"].push_back({{"index", got.range.shard},
                                               {"round", round},
                                               {"model", model_dir(o, round - 1)},
                                               {"first", got.range.first},
                                               {"count", got.range.count},
                                               {"first_scene", job.first_scene},
-                                              {"well_posed_labels", got.labelled}});
+                                              {"well_posed_labels", got.labelled},
+                                              {"well_posed_samples", got.samples}});
   a.parameters["count"] = a.count();
   char host[256] = {};
   (void)::gethostname(host, sizeof host - 1);
@@ -312,7 +320,7 @@ DaggerReport run(const DaggerOptions& options, std::ostream* progress) {
     RoundRow row = evaluate(options, "mlp-miqp", model_dir(options, r), "eval-" + std::to_string(r),
                             r, progress);
     row.labels = aggregate.labelled[static_cast<std::size_t>(r - 1)];
-    samples += row.labels;
+    samples += aggregate.samples[static_cast<std::size_t>(r - 1)];
     row.dagger_samples = samples;
     report.rounds.push_back(row);
   }

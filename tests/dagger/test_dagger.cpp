@@ -46,7 +46,7 @@ TEST(Dagger, TheExpertLabelsTheStatesTheNetworkVisits) {
       std::make_shared<expert::FastLaneChangeSolver>());
   const Scenario scene = testing::open_road_scenario();
   const int stride = 3;
-  const auto queries = dagger::detail::collect_scene(scene, learner, config, stride, 60.0);
+  const auto queries = dagger::detail::collect_scene(scene, learner, config, {stride, 1, 60.0});
   ASSERT_GE(queries.size(), 3U);
   const double dt = scene.horizon / scene.steps;
   bool some_plan = false;
@@ -63,6 +63,32 @@ TEST(Dagger, TheExpertLabelsTheStatesTheNetworkVisits) {
   // the ego lane's centre: a visited state, not the scene's start.
   ASSERT_GT(queries[1].outcome.trajectory.nodes(), 0);
   EXPECT_GT(queries[1].outcome.trajectory.ego[0].y, scene.ego.y + 1e-3);
+}
+
+// With more nodes kept, each query carries the expert's plan on from the
+// visited state, on the rollout's clock.
+TEST(Dagger, KeptNodesFollowTheVisitedStateOnTheRolloutsClock) {
+  const Config config = small_config();
+  const planner::MlpMiqpPlanner learner(
+      config, [](const Scenario&) { return static_cast<int>(Label::WellPosed); },
+      [](const planner::Observation&) {
+        return EgoControl{0.0, 0.0};
+      },
+      std::make_shared<expert::FastLaneChangeSolver>());
+  const Scenario scene = testing::open_road_scenario();
+  const double dt = scene.horizon / scene.steps;
+  const auto one = dagger::detail::collect_scene(scene, learner, config, {4, 1, 60.0});
+  const auto four = dagger::detail::collect_scene(scene, learner, config, {4, 4, 60.0});
+  ASSERT_EQ(one.size(), four.size());
+  ASSERT_GE(four.size(), 2U);
+  const Trajectory& a = one[1].outcome.trajectory;
+  const Trajectory& b = four[1].outcome.trajectory;
+  ASSERT_EQ(a.nodes(), 1);
+  ASSERT_EQ(b.nodes(), 4);
+  EXPECT_EQ(b.ego[0].x, a.ego[0].x);
+  EXPECT_EQ(b.controls[0].a, a.controls[0].a);
+  for (int k = 0; k < 4; ++k) EXPECT_NEAR(b.t[k], (4 + k) * dt, 1e-9);
+  EXPECT_GT(b.ego[3].x, b.ego[0].x);
 }
 
 class DaggerCli : public ::testing::Test {
@@ -116,7 +142,8 @@ TEST_F(DaggerCli, OneRoundAddsLabelsAsAValidDataSetAndTabulatesEachRound) {
   }
   EXPECT_EQ(table[1][0], "0");
   EXPECT_EQ(table[2][0], "1");
-  EXPECT_EQ(std::stoll(table[2][7]), after.samples.rows() - before.samples.rows());
+  EXPECT_EQ(std::stoll(table[2][8]), after.samples.rows() - before.samples.rows());
+  EXPECT_EQ(std::stoll(table[2][7]), std::stoll(table[2][8]));  // one node per query
 
   // --out holds the last round's model: a new network, the base's classifiers.
   const learn::Model model = learn::Model::load(dir_.file("model"));
@@ -139,9 +166,9 @@ TEST_F(DaggerCli, OneRoundAddsLabelsAsAValidDataSetAndTabulatesEachRound) {
 
 TEST_F(DaggerCli, BadOptionsAreRefusedAndWriteNothing) {
   const std::string work = dir_.file("work");
-  for (const char* bad :
-       {"--dagger -1", "--dagger 1 --dagger-scenes 0", "--dagger 1 --dagger-stride 0",
-        "--dagger 1 --dagger-eval-seed 7001", "--dagger-scenes 5"}) {
+  for (const char* bad : {"--dagger -1", "--dagger 1 --dagger-scenes 0",
+                          "--dagger 1 --dagger-stride 0", "--dagger 1 --dagger-eval-seed 7001",
+                          "--dagger 1 --dagger-label-nodes -1", "--dagger-scenes 5"}) {
     std::string options = bad;
     options += " --dagger-dir ";
     options += work;

@@ -23,6 +23,7 @@ struct DaggerOptions {
   long long scenes = 100;  ///< training scenes rolled out per round (fresh ones each round)
   std::uint64_t scene_seed = 7001;   ///< sampler seed of those scenes
   int stride = 1;                    ///< the expert labels every stride-th step
+  int label_nodes = 1;               ///< nodes kept of each expert plan; 0: all
   long long eval_count = 100;        ///< held-out scenes per evaluation
   std::uint64_t eval_seed = 2026;    ///< must differ from scene_seed and the data's seeds
   double label_time_limit_s = 60.0;  ///< per expert plan, as `generate`'s default
@@ -40,8 +41,8 @@ struct RoundRow {
   double takeovers_per_rollout = 0.0;
   double collision_rate = 0.0;
   double at_fault_collision_rate = 0.0;
-  long long labels = 0;          ///< expert queries answered with a plan, this round
-  long long dagger_samples = 0;  ///< action samples in the aggregated data set so far
+  long long labels = 0;          ///< expert queries answered with a well-posed plan, this round
+  long long dagger_samples = 0;  ///< well-posed sample rows in the aggregated data set so far
 };
 
 struct DaggerReport {
