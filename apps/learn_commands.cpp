@@ -90,6 +90,7 @@ void add_dagger_options(CLI::App& cmd, TrainArgs& a) {
                      "Nodes kept of each expert plan, from the visited state (0: all)"),
       cmd.add_option("--dagger-eval-count", d.eval_count, "Held-out scenes per evaluation"),
       cmd.add_option("--dagger-eval-seed", d.eval_seed, "Sampler seed of the held-out scenes")};
+  for (CLI::Option* option : a.dagger_only) option->capture_default_str();
 }
 
 }  // namespace
