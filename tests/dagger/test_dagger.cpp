@@ -21,6 +21,13 @@ Config small_config() {
   return c;
 }
 
+// A learner whose "network" always asks for the same control.
+planner::MlpMiqpPlanner constant_learner(const Config& config, EgoControl u) {
+  return {config, [](const Scenario&) { return static_cast<int>(Label::WellPosed); },
+          [u](const planner::Observation&) { return u; },
+          std::make_shared<expert::FastLaneChangeSolver>()};
+}
+
 // The lines of a CSV file, split into cells (our tables quote nothing).
 std::vector<std::vector<std::string>> read_csv(const std::string& path) {
   std::vector<std::vector<std::string>> rows;
@@ -38,12 +45,7 @@ std::vector<std::vector<std::string>> read_csv(const std::string& path) {
 // node, at the rollout's time, starting where the ego was.
 TEST(Dagger, TheExpertLabelsTheStatesTheNetworkVisits) {
   const Config config = small_config();
-  const planner::MlpMiqpPlanner learner(
-      config, [](const Scenario&) { return static_cast<int>(Label::WellPosed); },
-      [](const planner::Observation&) {
-        return EgoControl{0.0, 0.05};
-      },
-      std::make_shared<expert::FastLaneChangeSolver>());
+  const planner::MlpMiqpPlanner learner = constant_learner(config, {0.0, 0.05});
   const Scenario scene = testing::open_road_scenario();
   const int stride = 3;
   const auto queries = dagger::detail::collect_scene(scene, learner, config, {stride, 1, 60.0});
@@ -69,12 +71,7 @@ TEST(Dagger, TheExpertLabelsTheStatesTheNetworkVisits) {
 // visited state, on the rollout's clock.
 TEST(Dagger, KeptNodesFollowTheVisitedStateOnTheRolloutsClock) {
   const Config config = small_config();
-  const planner::MlpMiqpPlanner learner(
-      config, [](const Scenario&) { return static_cast<int>(Label::WellPosed); },
-      [](const planner::Observation&) {
-        return EgoControl{0.0, 0.0};
-      },
-      std::make_shared<expert::FastLaneChangeSolver>());
+  const planner::MlpMiqpPlanner learner = constant_learner(config, {0.0, 0.0});
   const Scenario scene = testing::open_road_scenario();
   const double dt = scene.horizon / scene.steps;
   const auto one = dagger::detail::collect_scene(scene, learner, config, {4, 1, 60.0});
