@@ -3,6 +3,8 @@
 
 #include <iostream>
 
+#include "lanechange/dagger/dagger.hpp"
+#include "lanechange/error.hpp"
 #include "lanechange/learn/model.hpp"
 #include "lanechange/learn/train.hpp"
 
@@ -20,6 +22,10 @@ struct TrainArgs {
   bool plain_naive_bayes = false;
   bool quick = false;
   bool no_plots = false;
+  // DAgger (docs/strategy.md); off unless --dagger is given.
+  dagger::DaggerOptions dagger;
+  CLI::Option* dagger_rounds = nullptr;
+  std::vector<CLI::Option*> dagger_only;
 };
 
 // The test accuracies of a loaded model, one line per classifier.
@@ -34,7 +40,7 @@ void print_model(const learn::Model& model, const std::string& dir) {
   }
 }
 
-void run_train(const TrainArgs& a) {
+learn::TrainOptions train_options(const TrainArgs& a) {
   learn::TrainOptions o;
   o.data_dirs = a.data;
   o.out_dir = a.out;
@@ -46,13 +52,50 @@ void run_train(const TrainArgs& a) {
   o.search.quick = a.quick;
   o.plots = !a.no_plots;
   o.progress = &std::cerr;
-  const learn::TrainReport report = learn::train_models(o);
+  return o;
+}
+
+void run_dagger(const TrainArgs& a, const Config& config) {
+  dagger::DaggerOptions o = a.dagger;
+  o.train = train_options(a);
+  o.config = config;
+  o.jobs = a.jobs;
+  if (o.work_dir.empty()) o.work_dir = a.out + "-dagger";
+  const dagger::DaggerReport report = dagger::run(o, &std::cerr);
+  std::cout << dagger::markdown_table(report);
+  std::cerr << "dagger: tables in " << o.work_dir << "/dagger.csv and dagger.md; the last round's "
+            << "model is at " << a.out << "\n";
+}
+
+void run_train(const TrainArgs& a, const ConfigSource& config) {
+  if (a.dagger_rounds->count() > 0) return run_dagger(a, config());
+  for (const CLI::Option* option : a.dagger_only) {
+    if (option->count() > 0) throw InputError(option->get_name(), "only goes with --dagger R");
+  }
+  const learn::TrainReport report = learn::train_models(train_options(a));
   std::cerr << "trained in " << report.wall_s << " s\n";
+}
+
+void add_dagger_options(CLI::App& cmd, TrainArgs& a) {
+  dagger::DaggerOptions& d = a.dagger;
+  a.dagger_rounds =
+      cmd.add_option("--dagger", d.rounds, "DAgger rounds after training (docs/strategy.md)");
+  a.dagger_only = {
+      cmd.add_option("--dagger-dir", d.work_dir,
+                     "DAgger's rounds, labels and tables (default: OUT-dagger; rerun to resume)"),
+      cmd.add_option("--dagger-scenes", d.scenes, "Training scenes rolled out per round"),
+      cmd.add_option("--dagger-seed", d.scene_seed, "Sampler seed of those scenes"),
+      cmd.add_option("--dagger-stride", d.stride, "The expert labels every k-th step"),
+      cmd.add_option("--dagger-label-nodes", d.label_nodes,
+                     "Nodes kept of each expert plan, from the visited state (0: all)"),
+      cmd.add_option("--dagger-eval-count", d.eval_count, "Held-out scenes per evaluation"),
+      cmd.add_option("--dagger-eval-seed", d.eval_seed, "Sampler seed of the held-out scenes")};
+  for (CLI::Option* option : a.dagger_only) option->capture_default_str();
 }
 
 }  // namespace
 
-void add_train(CLI::App& app) {
+void add_train(CLI::App& app, ConfigSource config) {
   auto* cmd = app.add_subcommand(
       "train", "Train the five classifiers and the action network on expert data sets");
   static TrainArgs args;
@@ -69,7 +112,8 @@ void add_train(CLI::App& app) {
                 "One normal per feature and class instead of kernel densities");
   cmd->add_flag("--quick", args.quick, "Smaller hyperparameter grids (tests, smoke runs)");
   cmd->add_flag("--no-plots", args.no_plots, "Skip the PNGs (no gnuplot needed)");
-  cmd->callback([] { run_train(args); });
+  add_dagger_options(*cmd, args);
+  cmd->callback([config] { run_train(args, config); });
 }
 
 void add_model_info(CLI::App& app) {

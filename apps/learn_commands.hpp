@@ -1,10 +1,12 @@
 #pragma once
 #include <CLI/CLI.hpp>
 
+#include "data_commands.hpp"
+
 namespace lanechange::app {
 
-/// `train` and `model-info` (docs/learning.md).
-void add_train(CLI::App& app);
+/// `train` (with `--dagger R`: docs/strategy.md) and `model-info` (docs/learning.md).
+void add_train(CLI::App& app, ConfigSource config);
 void add_model_info(CLI::App& app);
 
 }  // namespace lanechange::app

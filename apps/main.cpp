@@ -377,7 +377,7 @@ int main(int argc, char** argv) {
   lc::app::add_simulate(app, [&global] { return global.config(); });
   lc::app::add_evaluate(app, [&global] { return global.config(); });
   lc::app::add_strategy_study(app, [&global] { return global.config(); });
-  lc::app::add_train(app);
+  lc::app::add_train(app, [&global] { return global.config(); });
   lc::app::add_experiments(app, [&global] { return global.config(); });
   lc::app::add_model_info(app);
   try {

@@ -143,11 +143,18 @@ void remove_stale_temporaries(const std::string& dir) {
 void write_final_manifest(const std::string& dir, const json& parameters, const json& run) {
   const long long count = parameters.at("count").get<long long>();
   const long long shard_size = parameters.at("shard_size").get<long long>();
+  std::vector<ShardRange> ranges;
+  for (long long s = 0; s < shard_count(count, shard_size); ++s) {
+    ranges.push_back(shard_range(s, count, shard_size));
+  }
+  write_manifest_of_shards(dir, parameters, run, ranges);
+}
+
+void write_manifest_of_shards(const std::string& dir, const json& parameters, const json& run,
+                              const std::vector<ShardRange>& ranges) {
   ScenarioTally tally;
   json shards = json::array();
-  for (long long s = 0; s < shard_count(count, shard_size); ++s) {
-    shards.push_back(shard_entry(dir, shard_range(s, count, shard_size), tally));
-  }
+  for (const ShardRange& range : ranges) shards.push_back(shard_entry(dir, range, tally));
   const json manifest = {{"format", kDatasetFormat},
                          {"status", "complete"},
                          {"parameters", parameters},

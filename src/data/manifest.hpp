@@ -4,6 +4,7 @@
 // shard list, row counts, checksums and counts.
 #include <nlohmann/json.hpp>
 #include <string>
+#include <vector>
 
 namespace lanechange::data::detail {
 
@@ -22,6 +23,13 @@ void remove_stale_temporaries(const std::string& dir);
 /// manifest. `run` describes this run (host, ranks, ...).
 void write_final_manifest(const std::string& dir, const nlohmann::json& parameters,
                           const nlohmann::json& run);
+
+struct ShardRange;
+
+/// The same for shards of any sizes (DAgger's rounds, one shard each), in
+/// the order given; readers take the shard list from the manifest.
+void write_manifest_of_shards(const std::string& dir, const nlohmann::json& parameters,
+                              const nlohmann::json& run, const std::vector<ShardRange>& shards);
 
 /// The manifest of dir; InputError when missing or not one of ours.
 [[nodiscard]] nlohmann::json read_manifest(const std::string& dir);

@@ -6,6 +6,9 @@
 #include <chrono>
 #include <cmath>
 #include <filesystem>
+#include <map>
+#include <set>
+#include <utility>
 
 #include "common/json_fields.hpp"
 #include "data/manifest.hpp"
@@ -57,6 +60,15 @@ void publish(const fs::path& staging, const fs::path& out) {
   if (fs::exists(out)) fs::rename(out, old);
   fs::rename(staging, out);
   fs::remove_all(old);
+}
+
+// The output directory and the sibling it is built in before publish().
+std::pair<fs::path, fs::path> staging_for(const std::string& out_dir) {
+  fs::path out = fs::path(out_dir).lexically_normal();
+  if (out.filename().empty()) out = out.parent_path();  // "model/": the staging dir is a sibling
+  fs::path staging = out.string() + ".tmp." + std::to_string(::getpid());
+  fs::remove_all(staging);
+  return {out, staging};
 }
 
 struct Context {
@@ -311,7 +323,8 @@ json describe_data(const Context& c) {
   return {{"datasets", split}, {"scenarios", n}};
 }
 
-void write_description(Context& c) {
+// Everything model.json says beyond the files and their checksums.
+void describe_model(Context& c) {
   c.model["format"] = kModelFormat;
   c.model["config"] = c.options.config();
   c.model["seeds"] = c.seeds.to_json();
@@ -322,18 +335,40 @@ void write_description(Context& c) {
   c.model["features"]["action_inputs"] = c.data.action_inputs;
   c.model["features"]["action_targets"] = c.data.action_targets;
   c.model["features"]["classifier"] = c.data.classifier_features;
+}
+
+void write_model_files(Context& c) {
   lanechange::detail::write_file_atomically((c.dir / "metrics.json").string(), c.metrics.dump(2));
   lanechange::detail::write_file_atomically((c.dir / "report.md").string(),
                                             detail::report_markdown(c.metrics));
   // Every file but model.json itself, with its checksum.
   json files = json::object();
   for (const auto& entry : fs::recursive_directory_iterator(c.dir)) {
-    if (!entry.is_regular_file()) continue;
+    // A retrained model starts as a copy of its base, model.json included.
+    if (!entry.is_regular_file() || entry.path().filename() == kModelFile) continue;
     files[fs::relative(entry.path(), c.dir).generic_string()] =
         data::detail::file_crc32(entry.path().string());
   }
   c.model["files"] = files;
   lanechange::detail::write_file_atomically((c.dir / kModelFile).string(), c.model.dump(2));
+}
+
+// Fills the staging directory, completes it and publishes it; a failure
+// removes it and leaves any old model where it stood.
+template <class Fill>
+TrainReport build_and_publish(Context& c, const fs::path& out, Clock::time_point start,
+                              Fill&& fill) {
+  try {
+    fill();
+    write_model_files(c);
+    publish(c.dir, out);
+  } catch (...) {
+    std::error_code ignored;
+    fs::remove_all(c.dir, ignored);
+    throw;
+  }
+  c.say("wrote " + out.string());
+  return {c.metrics, seconds_since(start)};
 }
 
 }  // namespace
@@ -364,13 +399,10 @@ TrainReport train_models(const TrainOptions& options) {
   check_out_dir(options.out_dir);
   const LearningData data = load_learning_data(options.data_dirs);
   const Split split = split_scenarios(data.scenarios.rows(), options.test_share, options.seed);
-  fs::path out = fs::path(options.out_dir).lexically_normal();
-  if (out.filename().empty()) out = out.parent_path();  // "model/": the staging dir is a sibling
-  const fs::path staging = out.string() + ".tmp." + std::to_string(::getpid());
-  fs::remove_all(staging);
+  const auto [out, staging] = staging_for(options.out_dir);
   fs::create_directories(staging);
   Context c{options, data, split, Seeds(options.seed), staging, json::object(), json::object()};
-  try {
+  return build_and_publish(c, out, start, [&] {
     c.say("read " + std::to_string(data.scenarios.rows()) + " scenarios and " +
           std::to_string(data.samples.rows()) + " well-posed samples from " +
           std::to_string(data.datasets.size()) + " data set(s)");
@@ -389,15 +421,59 @@ TrainReport train_models(const TrainOptions& options) {
     train_action_network(c);
     train_strategy(c);
     c.metrics["wall_s"] = seconds_since(start);
-    write_description(c);
-    publish(staging, out);
-  } catch (...) {
-    std::error_code ignored;
-    fs::remove_all(staging, ignored);
-    throw;
+    describe_model(c);
+  });
+}
+
+namespace {
+
+// The base model's split for the data sets it was trained on (found by
+// their manifests' checksums); every row of another data set trains.
+Split base_split(const LearningData& data, const json& base) {
+  std::map<std::string, std::set<long long>> test_of;
+  for (const json& d : base.at("data").at("datasets")) {
+    const auto indices = d.at("test_indices").get<std::vector<long long>>();
+    test_of[d.at("manifest_crc32").get<std::string>()] = {indices.begin(), indices.end()};
   }
-  c.say("wrote " + out.string());
-  return {c.metrics, seconds_since(start)};
+  Split split;
+  for (int r = 0; r < data.scenarios.rows(); ++r) {
+    const auto row = static_cast<std::size_t>(r);
+    const auto& id = data.datasets[static_cast<std::size_t>(data.scenarios.dataset[row])];
+    const auto it = test_of.find(id.manifest_crc32);
+    const bool test = it != test_of.end() && it->second.count(data.scenarios.index[row]) > 0;
+    (test ? split.test : split.train).push_back(r);
+  }
+  return split;
+}
+
+}  // namespace
+
+TrainReport retrain_network(const RetrainOptions& options) {
+  const auto start = Clock::now();
+  check_out_dir(options.out_dir);
+  const json base = Model::load(options.base_model).description();
+  const LearningData data = load_learning_data(options.data_dirs);
+  if (data.config != base.at("expert_config")) {
+    throw InputError("--data", "the data sets' expert config is not the base model's");
+  }
+  const Split split = base_split(data, base);
+  TrainOptions train;
+  train.seed = base.at("config").at("seed").get<std::uint64_t>();
+  train.network = options.network;
+  train.plots = options.plots;
+  train.progress = options.progress;
+  const auto [out, staging] = staging_for(options.out_dir);
+  const json metrics =
+      lanechange::detail::read_json_file((fs::path(options.base_model) / "metrics.json").string());
+  Context c{train, data, split, Seeds(train.seed), staging, base, metrics};
+  return build_and_publish(c, out, start, [&] {
+    fs::copy(options.base_model, staging, fs::copy_options::recursive);
+    train_action_network(c);
+    c.model["data"] = describe_data(c);
+    c.model["retrained_network"] = {{"base_model", options.base_model}, {"note", options.note}};
+    c.metrics["data"]["samples_network"] = data.samples.rows();
+    c.metrics["wall_s_retrain"] = seconds_since(start);
+  });
 }
 
 }  // namespace lanechange::learn

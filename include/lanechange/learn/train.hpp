@@ -40,4 +40,24 @@ struct TrainReport {
 /// only by a complete new one.
 TrainReport train_models(const TrainOptions& options);
 
+/// A new action network for an existing model (DAgger, docs/strategy.md):
+/// the base model's other parts (classifiers, strategy model, split) are
+/// kept; the network is trained afresh, with the base model's seed, on the
+/// well-posed plans of every data set given. Rows of the data sets the base
+/// was trained on keep its train/test split; rows of any other data set all
+/// train. The data sets must share the base model's expert config.
+struct RetrainOptions {
+  std::string base_model;
+  std::vector<std::string> data_dirs;
+  std::string out_dir;  ///< written atomically, as train_models does
+  NetworkSettings network;
+  bool plots = true;
+  std::ostream* progress = nullptr;
+  nlohmann::json note;  ///< recorded in model.json ("retrained_network")
+};
+
+/// InputError for a missing or damaged base model or data set, data of
+/// another expert config, or an out_dir that is not a model.
+TrainReport retrain_network(const RetrainOptions& options);
+
 }  // namespace lanechange::learn

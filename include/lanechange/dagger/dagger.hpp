@@ -1,0 +1,63 @@
+#pragma once
+// DAgger for the action network (Ross et al. 2011; docs/strategy.md,
+// "DAgger"): roll the learner out in closed loop on training scenes, ask
+// the expert to plan from the states it visits, add those labels to the
+// data, retrain the network, and measure mlp-miqp on held-out scenes after
+// every round.
+#include <cstdint>
+#include <ostream>
+#include <string>
+#include <vector>
+
+#include "lanechange/config.hpp"
+#include "lanechange/learn/train.hpp"
+
+namespace lanechange::dagger {
+
+struct DaggerOptions {
+  /// The base model's training (data sets, seed, settings); its out_dir is
+  /// where the final model (the last round's) is published.
+  learn::TrainOptions train;
+  std::string work_dir;  ///< rounds' models, evaluations, labels, tables
+  int rounds = 1;
+  long long scenes = 100;  ///< training scenes rolled out per round (fresh ones each round)
+  std::uint64_t scene_seed = 7001;   ///< sampler seed of those scenes
+  int stride = 1;                    ///< the expert labels every stride-th step
+  int label_nodes = 1;               ///< nodes kept of each expert plan; 0: all
+  long long eval_count = 100;        ///< held-out scenes per evaluation
+  std::uint64_t eval_seed = 2026;    ///< must differ from scene_seed and the data's seeds
+  double label_time_limit_s = 60.0;  ///< per expert plan, as `generate`'s default
+  Config config;                     ///< the closed loop's (rollouts, labels, evaluations)
+  int jobs = 0;                      ///< threads; 0: one per core
+};
+
+/// One row of dagger.csv: mlp-miqp with round r's model (round 0: before
+/// DAgger), or the expert (planner "miqp", round -1) for reference.
+struct RoundRow {
+  int round = 0;
+  std::string planner;
+  long long rollouts = 0;
+  double success_rate = 0.0;
+  double takeovers_per_rollout = 0.0;
+  double collision_rate = 0.0;
+  double at_fault_collision_rate = 0.0;
+  long long labels = 0;          ///< expert queries answered with a well-posed plan, this round
+  long long dagger_samples = 0;  ///< well-posed sample rows in the aggregated data set so far
+};
+
+struct DaggerReport {
+  std::vector<RoundRow> rounds;  ///< round 0..R
+  RoundRow expert;
+  std::string dataset_dir;  ///< the aggregated labels (none when R = 0)
+};
+
+/// Runs (or resumes: finished steps are kept) R rounds. InputError for bad
+/// options (R < 0, no scenes, ...), missing data or a work_dir that holds
+/// another DAgger run.
+DaggerReport run(const DaggerOptions& options, std::ostream* progress);
+
+/// dagger.csv's columns, and the same rows as a markdown table.
+[[nodiscard]] std::vector<std::string> table_columns();
+[[nodiscard]] std::string markdown_table(const DaggerReport& report);
+
+}  // namespace lanechange::dagger

@@ -1,0 +1,131 @@
+// DAgger's data collection (docs/strategy.md, "DAgger"). The learner is the
+// bare action network: the states it visits without the take-over are the
+// ones it has to learn to leave, and classic DAgger rolls the learner out.
+#include "dagger/collect.hpp"
+
+#include <algorithm>
+#include <atomic>
+#include <thread>
+
+#include "lanechange/data/progress.hpp"
+#include "lanechange/sampler.hpp"
+#include "lanechange/sim/simulator.hpp"
+#include "planner/miqp_planner.hpp"
+
+namespace lanechange::dagger::detail {
+
+namespace {
+
+// Node 0 of the plan from now is the observation's state; the plan's clock
+// starts there, so its times move by the rollout's.
+Query first_nodes(data::detail::PlanOutcome outcome, double t, int nodes) {
+  Trajectory& path = outcome.trajectory;
+  if (nodes > 0 && path.nodes() > nodes) {
+    const auto keep = static_cast<std::size_t>(nodes);
+    path.t.resize(keep);
+    path.ego.resize(keep);
+    path.controls.resize(keep);
+    outcome.lane_modes.resize(std::min(outcome.lane_modes.size(), keep));
+  }
+  for (double& time : path.t) time += t;
+  return {std::move(outcome)};
+}
+
+class LearnerSession final : public planner::PlannerSession {
+ public:
+  LearnerSession(const planner::MlpMiqpPlanner& learner, const Labelling& labelling,
+                 std::vector<Query>& sink)
+      : learner_(learner), labelling_(labelling), sink_(sink) {}
+
+  [[nodiscard]] planner::Decision act(const planner::Observation& o) override {
+    if (o.step % labelling_.stride == 0) {
+      // The call miqp's re-plan makes, from the scene as it is now, but
+      // without a warm start: the learner's path is not the expert's.
+      const Scenario now = planner::scene_now(o, learner_.config());
+      sink_.push_back(
+          first_nodes(data::detail::plan_outcome(learner_.expert(), now, labelling_.time_limit_s),
+                      o.t, labelling_.nodes));
+    }
+    return {learner_.network(o), planner::ActStatus::Planned, ""};
+  }
+
+ private:
+  const planner::MlpMiqpPlanner& learner_;
+  const Labelling& labelling_;
+  std::vector<Query>& sink_;
+};
+
+class LearnerPlanner final : public planner::ClosedLoopPlanner {
+ public:
+  LearnerPlanner(const planner::MlpMiqpPlanner& learner, const Labelling& labelling,
+                 std::vector<Query>& sink)
+      : learner_(learner), labelling_(labelling), sink_(sink) {}
+  [[nodiscard]] std::string_view name() const override { return "dagger-learner"; }
+  [[nodiscard]] std::unique_ptr<planner::PlannerSession> start(
+      const Scenario& /*scene*/) const override {
+    return std::make_unique<LearnerSession>(learner_, labelling_, sink_);
+  }
+
+ private:
+  const planner::MlpMiqpPlanner& learner_;
+  const Labelling& labelling_;
+  std::vector<Query>& sink_;
+};
+
+}  // namespace
+
+std::vector<Query> collect_scene(const Scenario& scene, const planner::MlpMiqpPlanner& learner,
+                                 const Config& config, const Labelling& labelling) {
+  // The expert's queries are labelling, not driving: they must never count
+  // as an overrun that hands the step to the fallback.
+  Config untimed = config;
+  untimed.closed_loop.step_budget_ms = 1e12;
+  std::vector<Query> queries;
+  const LearnerPlanner planner(learner, labelling, queries);
+  (void)sim::simulate(scene, planner, untimed);
+  return queries;
+}
+
+RoundData collect_round(const CollectJob& job, const std::string& dir, long long shard,
+                        long long first_index) {
+  const ScenarioSampler sampler(job.config, job.scene_seed);
+  std::vector<std::vector<Query>> per_scene(static_cast<std::size_t>(job.scenes));
+  std::atomic<long long> next{0};
+  data::Progress progress(job.progress, false, job.scenes, -1.0, "dagger", "learner rollouts");
+  auto work = [&] {
+    for (long long i = next++; i < job.scenes; i = next++) {
+      const Scenario scene = sampler.sample(static_cast<std::uint64_t>(job.first_scene + i));
+      per_scene[static_cast<std::size_t>(i)] =
+          collect_scene(scene, job.learner, job.config, job.labelling);
+      progress.add(1);
+    }
+  };
+  const int jobs =
+      job.jobs > 0 ? job.jobs : std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
+  std::vector<std::thread> threads;
+  for (int t = 1; t < jobs; ++t) threads.emplace_back(work);
+  work();
+  for (std::thread& t : threads) t.join();
+  progress.finish();
+
+  RoundData out;
+  out.range = {shard, first_index, 0};
+  data::detail::ShardFiles files(dir, shard);
+  for (long long i = 0; i < job.scenes; ++i) {
+    const auto scene_index = static_cast<std::uint64_t>(job.first_scene + i);
+    const Scenario scene = sampler.sample(scene_index);
+    for (const Query& query : per_scene[static_cast<std::size_t>(i)]) {
+      const auto index = static_cast<std::uint64_t>(first_index + out.range.count++);
+      if (query.outcome.label == Label::WellPosed) {
+        ++out.labelled;
+        out.samples += query.outcome.trajectory.nodes();
+      }
+      files.write(data::detail::scenario_rows(index, scenario_seed(job.scene_seed, scene_index),
+                                              scene, query.outcome));
+    }
+  }
+  files.commit();
+  return out;
+}
+
+}  // namespace lanechange::dagger::detail

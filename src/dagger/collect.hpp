@@ -1,0 +1,57 @@
+#pragma once
+// DAgger's data collection: the learner drives, the expert labels.
+#include <cstdint>
+#include <ostream>
+#include <string>
+#include <vector>
+
+#include "data/rows.hpp"
+#include "data/shard.hpp"
+#include "lanechange/config.hpp"
+#include "lanechange/scenario.hpp"
+#include "planner/mlp_miqp_planner.hpp"
+
+namespace lanechange::dagger::detail {
+
+/// The expert's plan from one visited state, cut to its first nodes: node 0
+/// holds the observation's inputs and the control the expert applies there.
+struct Query {
+  data::detail::PlanOutcome outcome;
+};
+
+/// Which states the expert labels, and how much of its plan is kept.
+struct Labelling {
+  int stride = 1;  ///< every stride-th step the network drives
+  int nodes = 1;   ///< of each plan, from node 0; 0: the whole plan
+  double time_limit_s = 60.0;
+};
+
+/// Rolls the learner's network out on `scene` (no classifier, no take-over)
+/// and asks `learner`'s expert for a plan at the states `labelling` names.
+[[nodiscard]] std::vector<Query> collect_scene(const Scenario& scene,
+                                               const planner::MlpMiqpPlanner& learner,
+                                               const Config& config, const Labelling& labelling);
+
+struct RoundData {
+  data::detail::ShardRange range;  ///< the shard written
+  long long labelled = 0;          ///< queries answered with a well-posed plan
+  long long samples = 0;           ///< rows of those plans in the samples file
+};
+
+/// Collects the labels of scenes [first_scene, first_scene + scenes) on
+/// `jobs` threads and writes them as shard `shard` of `dir`, scenario
+/// indices from `first_index`, in scene order whatever the threads did.
+struct CollectJob {
+  const planner::MlpMiqpPlanner& learner;
+  const Config& config;
+  std::uint64_t scene_seed = 0;
+  long long first_scene = 0;
+  long long scenes = 0;
+  Labelling labelling;
+  int jobs = 1;
+  std::ostream* progress = nullptr;  ///< one line every few seconds (none if null)
+};
+[[nodiscard]] RoundData collect_round(const CollectJob& job, const std::string& dir,
+                                      long long shard, long long first_index);
+
+}  // namespace lanechange::dagger::detail

@@ -1,0 +1,333 @@
+// DAgger rounds (docs/strategy.md, "DAgger"): round 0 is the model trained
+// on the expert's data; round r rolls round r-1's network out on fresh
+// training scenes, has the expert label the states it visits, adds them to
+// the aggregated data set and trains the network again on everything. Each
+// step leaves its result on disk, so a killed run resumes where it stopped.
+#include "lanechange/dagger/dagger.hpp"
+
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "common/json_fields.hpp"
+#include "dagger/collect.hpp"
+#include "data/manifest.hpp"
+#include "lanechange/error.hpp"
+#include "lanechange/expert/lane_change_solver.hpp"
+#include "lanechange/learn/model.hpp"
+#include "lanechange/sim/evaluate.hpp"
+#include "planner/mlp_miqp_planner.hpp"
+
+namespace lanechange::dagger {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+std::string model_dir(const DaggerOptions& o, int round) {
+  return (fs::path(o.work_dir) / ("model-" + std::to_string(round))).string();
+}
+std::string data_dir(const DaggerOptions& o) { return (fs::path(o.work_dir) / "data").string(); }
+bool has_model(const std::string& dir) { return fs::exists(fs::path(dir) / learn::kModelFile); }
+
+void require(bool ok, const char* field, const std::string& problem) {
+  if (!ok) throw InputError(field, problem);
+}
+
+void validate(const DaggerOptions& o) {
+  require(o.rounds >= 0 && o.rounds <= 100, "--dagger", "rounds must be in [0, 100]");
+  require(o.scenes >= 1, "--dagger-scenes", "must be at least 1");
+  require(o.stride >= 1, "--dagger-stride", "must be at least 1");
+  require(o.label_nodes >= 0, "--dagger-label-nodes", "must be at least 0 (0: whole plans)");
+  require(o.eval_count >= 1, "--dagger-eval-count", "must be at least 1");
+  require(o.eval_seed != o.scene_seed, "--dagger-eval-seed",
+          "must differ from --dagger-seed: the evaluation scenes must be held out");
+  require(o.label_time_limit_s > 0.0, "label_time_limit_s", "must be positive");
+  require(!o.work_dir.empty(), "--dagger-dir", "must not be empty");
+  require(!o.train.out_dir.empty(), "--out", "must not be empty");
+  require(!o.train.data_dirs.empty(), "--data", "at least one data set is needed");
+  const fs::path out(o.train.out_dir);
+  require(!fs::exists(out) || fs::is_empty(out) || has_model(o.train.out_dir), "--out",
+          o.train.out_dir + " is not empty and holds no model; refusing to replace it");
+  for (const std::string& dir : o.train.data_dirs) {
+    require(fs::is_directory(dir), "--data", dir + " is not a directory");
+  }
+}
+
+// What fixes the run's content; a resume must match it (rounds may grow).
+json run_parameters(const DaggerOptions& o) {
+  const json config = o.config;
+  return {{"data", o.train.data_dirs},
+          {"train", o.train.config()},
+          {"scenes_per_round", o.scenes},
+          {"scene_seed", o.scene_seed},
+          {"stride", o.stride},
+          {"label_nodes", o.label_nodes},
+          {"eval_count", o.eval_count},
+          {"eval_seed", o.eval_seed},
+          {"label_time_limit_s", o.label_time_limit_s},
+          {"max_epochs", o.train.network.max_epochs},
+          {"config", config}};
+}
+
+void prepare_work_dir(const DaggerOptions& o) {
+  const fs::path file = fs::path(o.work_dir) / "dagger.json";
+  const json parameters = run_parameters(o);
+  if (fs::exists(file)) {
+    if (lanechange::detail::read_json_file(file.string()) != parameters) {
+      throw InputError("--dagger-dir", o.work_dir +
+                                           " holds a DAgger run with other parameters; use a new "
+                                           "directory or the same options");
+    }
+    return;
+  }
+  if (fs::exists(o.work_dir) && !fs::is_empty(o.work_dir)) {
+    throw InputError("--dagger-dir", o.work_dir + " is not empty and holds no DAgger run");
+  }
+  fs::create_directories(o.work_dir);
+  lanechange::detail::write_file_atomically(file.string(), parameters.dump(2) + "\n");
+}
+
+RoundRow score(const std::string& rollouts_csv, const std::string& planner, int round) {
+  RoundRow row;
+  row.round = round;
+  row.planner = planner;
+  double takeovers = 0.0;
+  long long success = 0, collision = 0, at_fault = 0;
+  for (const sim::RolloutRow& r : sim::read_rollouts(rollouts_csv)) {
+    if (r.planner != planner) continue;
+    ++row.rollouts;
+    takeovers += r.takeovers;
+    success += r.success() ? 1 : 0;
+    collision += r.collision ? 1 : 0;
+    at_fault += r.at_fault ? 1 : 0;
+  }
+  const double n = double(std::max<long long>(row.rollouts, 1));
+  row.success_rate = double(success) / n;
+  row.takeovers_per_rollout = takeovers / n;
+  row.collision_rate = double(collision) / n;
+  row.at_fault_collision_rate = double(at_fault) / n;
+  return row;
+}
+
+// The held-out evaluation of one planner; evaluate resumes on its own.
+RoundRow evaluate(const DaggerOptions& o, const std::string& planner, const std::string& model,
+                  const std::string& name, int round, std::ostream* progress) {
+  sim::EvaluateOptions e;
+  e.count = o.eval_count;
+  e.seed = o.eval_seed;
+  e.planners = {planner};
+  e.model_dir = model;
+  e.out_dir = (fs::path(o.work_dir) / name).string();
+  e.config = o.config;
+  sim::EvaluateRun run;
+  run.jobs = o.jobs;
+  run.progress = progress;
+  (void)sim::evaluate(e, run);
+  RoundRow row = score((fs::path(e.out_dir) / "rollouts.csv").string(), planner, round);
+  if (progress != nullptr) {
+    *progress << "dagger: "
+              << (round < 0 ? std::string("reference") : "round " + std::to_string(round)) << ", "
+              << planner << ": success " << row.success_rate << ", take-overs per rollout "
+              << row.takeovers_per_rollout << ", collisions " << row.collision_rate << std::endl;
+  }
+  return row;
+}
+
+// The aggregated data set: one shard per round, listed in the manifest's
+// parameters.dagger.shards with how many well-posed labels each holds.
+struct Aggregate {
+  json parameters;
+  std::vector<data::detail::ShardRange> shards;
+  std::vector<long long> labelled;
+  std::vector<long long> samples;  // well-posed rows
+  [[nodiscard]] long long count() const {
+    return shards.empty() ? 0 : shards.back().first + shards.back().count;
+  }
+};
+
+Aggregate read_aggregate(const DaggerOptions& o) {
+  Aggregate a;
+  const json data_config =
+      data::detail::read_manifest(o.train.data_dirs.front()).at("parameters").at("config");
+  const json closed_loop = o.config;
+  a.parameters = {{"version", LANECHANGE_VERSION},
+                  {"count", 0},
+                  {"seed", o.scene_seed},
+                  {"behavior", "all"},
+                  {"solver", "fast"},
+                  {"time_limit_s", o.label_time_limit_s},
+                  {"config", data_config},
+                  {"dagger",
+                   {{"labels",
+                     "the closed-loop expert (miqp's re-plan) from states the action "
+                     "network visits; node 0 is the visited state"},
+                    {"stride", o.stride},
+                    {"label_nodes", o.label_nodes},
+                    {"scenes_per_round", o.scenes},
+                    {"closed_loop_config", closed_loop},
+                    {"shards", json::array()}}}};
+  if (!fs::exists(fs::path(data_dir(o)) / data::kManifestName)) return a;
+  data::detail::remove_stale_temporaries(data_dir(o));  // a killed round's shard
+  const json old = data::detail::read_manifest(data_dir(o)).at("parameters");
+  for (const json& s : old.at("dagger").at("shards")) {
+    a.shards.push_back({s.at("index").get<long long>(), s.at("first").get<long long>(),
+                        s.at("count").get<long long>()});
+    a.labelled.push_back(s.at("well_posed_labels").get<long long>());
+    a.samples.push_back(s.value("well_posed_samples", a.labelled.back()));
+    a.parameters["dagger"]["shards"].push_back(s);
+  }
+  return a;
+}
+
+void add_round(Aggregate& a, const DaggerOptions& o, int round, std::ostream* progress) {
+  const auto model =
+      std::make_shared<const learn::Model>(learn::Model::load(model_dir(o, round - 1)));
+  const planner::MlpMiqpPlanner learner(o.config, model,
+                                        std::make_shared<expert::FastLaneChangeSolver>());
+  fs::create_directories(data_dir(o));
+  const detail::CollectJob job{learner,      o.config,
+                               o.scene_seed, (round - 1) * o.scenes,
+                               o.scenes,     {o.stride, o.label_nodes, o.label_time_limit_s},
+                               o.jobs,       progress};
+  const detail::RoundData got = detail::collect_round(job, data_dir(o), round - 1, a.count());
+  a.shards.push_back(got.range);
+  a.labelled.push_back(got.labelled);
+  a.samples.push_back(got.samples);
+  a.parameters["dagger"]["shards"].push_back({{"index", got.range.shard},
+                                              {"round", round},
+                                              {"model", model_dir(o, round - 1)},
+                                              {"first", got.range.first},
+                                              {"count", got.range.count},
+                                              {"first_scene", job.first_scene},
+                                              {"well_posed_labels", got.labelled},
+                                              {"well_posed_samples", got.samples}});
+  a.parameters["count"] = a.count();
+  char host[256] = {};
+  (void)::gethostname(host, sizeof host - 1);
+  const json run = {{"host", host}, {"ranks", 1}, {"jobs_per_rank", o.jobs}};
+  data::detail::write_manifest_of_shards(data_dir(o), a.parameters, run, a.shards);
+  if (progress != nullptr) {
+    *progress << "dagger: round " << round << ": " << got.range.count << " expert queries, "
+              << got.labelled << " well-posed labels" << std::endl;
+  }
+}
+
+// The last round's model, published at --out as train publishes its own.
+void publish_copy(const std::string& from, const std::string& to) {
+  fs::path out = fs::path(to).lexically_normal();
+  if (out.filename().empty()) out = out.parent_path();
+  const fs::path staging = out.string() + ".tmp." + std::to_string(::getpid());
+  fs::remove_all(staging);
+  fs::copy(from, staging, fs::copy_options::recursive);
+  fs::remove_all(out);
+  fs::rename(staging, out);
+}
+
+void write_tables(const DaggerOptions& o, const DaggerReport& report) {
+  std::string csv;
+  for (const std::string& c : table_columns()) {
+    if (!csv.empty()) csv += ',';
+    csv += c;
+  }
+  csv += '\n';
+  std::vector<RoundRow> rows = report.rounds;
+  rows.push_back(report.expert);
+  for (const RoundRow& r : rows) {
+    const std::vector<std::string> cells = {std::to_string(r.round),
+                                            r.planner,
+                                            std::to_string(r.rollouts),
+                                            std::to_string(r.success_rate),
+                                            std::to_string(r.takeovers_per_rollout),
+                                            std::to_string(r.collision_rate),
+                                            std::to_string(r.at_fault_collision_rate),
+                                            std::to_string(r.labels),
+                                            std::to_string(r.dagger_samples)};
+    for (std::size_t i = 0; i < cells.size(); ++i) {
+      if (i > 0) csv += ',';
+      csv += cells[i];
+    }
+    csv += '\n';
+  }
+  const fs::path dir(o.work_dir);
+  lanechange::detail::write_file_atomically((dir / "dagger.csv").string(), csv);
+  lanechange::detail::write_file_atomically((dir / "dagger.md").string(), markdown_table(report));
+}
+
+}  // namespace
+
+std::vector<std::string> table_columns() {
+  return {"round",
+          "planner",
+          "rollouts",
+          "success_rate",
+          "takeovers_per_rollout",
+          "collision_rate",
+          "at_fault_collision_rate",
+          "labels",
+          "dagger_samples"};
+}
+
+std::string markdown_table(const DaggerReport& report) {
+  std::string md =
+      "| round | planner | rollouts | success | take-overs per rollout | collisions | at-fault "
+      "collisions | new well-posed labels | DAgger samples so far |\n"
+      "|---|---|---|---|---|---|---|---|---|\n";
+  std::vector<RoundRow> rows = report.rounds;
+  rows.push_back(report.expert);
+  char line[256];
+  for (const RoundRow& r : rows) {
+    std::snprintf(
+        line, sizeof line, "| %s | %s | %lld | %.1f%% | %.2f | %.1f%% | %.1f%% | %lld | %lld |\n",
+        r.round < 0 ? "-" : std::to_string(r.round).c_str(), r.planner.c_str(), r.rollouts,
+        100.0 * r.success_rate, r.takeovers_per_rollout, 100.0 * r.collision_rate,
+        100.0 * r.at_fault_collision_rate, r.labels, r.dagger_samples);
+    md += line;
+  }
+  return md;
+}
+
+DaggerReport run(const DaggerOptions& options, std::ostream* progress) {
+  validate(options);
+  prepare_work_dir(options);
+  DaggerReport report;
+  if (!has_model(model_dir(options, 0))) {
+    learn::TrainOptions train = options.train;
+    train.out_dir = model_dir(options, 0);
+    (void)learn::train_models(train);
+  }
+  report.expert = evaluate(options, "miqp", "", "eval-miqp", -1, progress);
+  report.rounds.push_back(
+      evaluate(options, "mlp-miqp", model_dir(options, 0), "eval-0", 0, progress));
+  Aggregate aggregate = read_aggregate(options);
+  long long samples = 0;
+  for (int r = 1; r <= options.rounds; ++r) {
+    if (static_cast<int>(aggregate.shards.size()) < r) add_round(aggregate, options, r, progress);
+    if (!has_model(model_dir(options, r))) {
+      learn::RetrainOptions retrain;
+      retrain.base_model = model_dir(options, 0);
+      retrain.data_dirs = options.train.data_dirs;
+      retrain.data_dirs.push_back(data_dir(options));
+      retrain.out_dir = model_dir(options, r);
+      retrain.network = options.train.network;
+      retrain.plots = options.train.plots;
+      retrain.progress = options.train.progress;
+      retrain.note = {{"dagger_round", r}, {"data", data_dir(options)}};
+      (void)learn::retrain_network(retrain);
+    }
+    RoundRow row = evaluate(options, "mlp-miqp", model_dir(options, r), "eval-" + std::to_string(r),
+                            r, progress);
+    row.labels = aggregate.labelled[static_cast<std::size_t>(r - 1)];
+    samples += aggregate.samples[static_cast<std::size_t>(r - 1)];
+    row.dagger_samples = samples;
+    report.rounds.push_back(row);
+  }
+  if (options.rounds > 0) report.dataset_dir = data_dir(options);
+  write_tables(options, report);
+  publish_copy(model_dir(options, options.rounds), options.train.out_dir);
+  return report;
+}
+
+}  // namespace lanechange::dagger

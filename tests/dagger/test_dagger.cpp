@@ -1,0 +1,183 @@
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "dagger/collect.hpp"
+#include "lanechange/data/dataset.hpp"
+#include "lanechange/learn/learn_data.hpp"
+#include "lanechange/learn/model.hpp"
+#include "test_helpers.hpp"
+
+namespace lanechange {
+namespace {
+
+namespace fs = std::filesystem;
+
+Config small_config() {
+  Config c = testing::untimed_config();
+  c.expert.steps = 20;
+  return c;
+}
+
+// A learner whose "network" always asks for the same control.
+planner::MlpMiqpPlanner constant_learner(const Config& config, EgoControl u) {
+  return {config, [](const Scenario&) { return static_cast<int>(Label::WellPosed); },
+          [u](const planner::Observation&) { return u; },
+          std::make_shared<expert::FastLaneChangeSolver>()};
+}
+
+// The lines of a CSV file, split into cells (our tables quote nothing).
+std::vector<std::vector<std::string>> read_csv(const std::string& path) {
+  std::vector<std::vector<std::string>> rows;
+  std::ifstream in(path);
+  for (std::string line; std::getline(in, line);) {
+    std::vector<std::string> cells;
+    std::stringstream fields(line);
+    for (std::string cell; std::getline(fields, cell, ',');) cells.push_back(cell);
+    rows.push_back(cells);
+  }
+  return rows;
+}
+
+// Each query is the expert's plan from a state the network drove to: one
+// node, at the rollout's time, starting where the ego was.
+TEST(Dagger, TheExpertLabelsTheStatesTheNetworkVisits) {
+  const Config config = small_config();
+  const planner::MlpMiqpPlanner learner = constant_learner(config, {0.0, 0.05});
+  const Scenario scene = testing::open_road_scenario();
+  const int stride = 3;
+  const auto queries = dagger::detail::collect_scene(scene, learner, config, {stride, 1, 60.0});
+  ASSERT_GE(queries.size(), 3U);
+  const double dt = scene.horizon / scene.steps;
+  bool some_plan = false;
+  for (std::size_t i = 0; i < queries.size(); ++i) {
+    const Trajectory& path = queries[i].outcome.trajectory;
+    if (path.nodes() == 0) continue;
+    some_plan = true;
+    ASSERT_EQ(path.nodes(), 1);
+    EXPECT_NEAR(path.t[0], double(i * stride) * dt, 1e-9);
+    EXPECT_TRUE(std::isfinite(path.controls[0].a));
+  }
+  EXPECT_TRUE(some_plan);
+  // The network steers left from the start, so the second query starts off
+  // the ego lane's centre: a visited state, not the scene's start.
+  ASSERT_GT(queries[1].outcome.trajectory.nodes(), 0);
+  EXPECT_GT(queries[1].outcome.trajectory.ego[0].y, scene.ego.y + 1e-3);
+}
+
+// With more nodes kept, each query carries the expert's plan on from the
+// visited state, on the rollout's clock.
+TEST(Dagger, KeptNodesFollowTheVisitedStateOnTheRolloutsClock) {
+  const Config config = small_config();
+  const planner::MlpMiqpPlanner learner = constant_learner(config, {0.0, 0.0});
+  const Scenario scene = testing::open_road_scenario();
+  const double dt = scene.horizon / scene.steps;
+  const auto one = dagger::detail::collect_scene(scene, learner, config, {4, 1, 60.0});
+  const auto four = dagger::detail::collect_scene(scene, learner, config, {4, 4, 60.0});
+  ASSERT_EQ(one.size(), four.size());
+  ASSERT_GE(four.size(), 2U);
+  const Trajectory& a = one[1].outcome.trajectory;
+  const Trajectory& b = four[1].outcome.trajectory;
+  ASSERT_EQ(a.nodes(), 1);
+  ASSERT_EQ(b.nodes(), 4);
+  EXPECT_EQ(b.ego[0].x, a.ego[0].x);
+  EXPECT_EQ(b.controls[0].a, a.controls[0].a);
+  for (int k = 0; k < 4; ++k) EXPECT_NEAR(b.t[k], (4 + k) * dt, 1e-9);
+  EXPECT_GT(b.ego[3].x, b.ego[0].x);
+}
+
+class DaggerCli : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    testing::write_text(config_, nlohmann::json(small_config()).dump());
+    const auto made = testing::run_cli("--config " + config_ +
+                                       " generate --count 40 --seed 3 --jobs 2 --out " + data_);
+    ASSERT_EQ(made.exit_code, 0) << made.output;
+  }
+  [[nodiscard]] testing::CommandResult train(const std::string& extra) const {
+    return testing::run_cli("--config " + config_ +
+                            " train --quick --no-plots --max-epochs 10 --jobs 2 --data " + data_ +
+                            " --out " + dir_.file("model") + " " + extra);
+  }
+  testing::TempDir dir_;
+  std::string config_ = dir_.file("config.json");
+  std::string data_ = dir_.file("data");
+};
+
+TEST_F(DaggerCli, OneRoundAddsLabelsAsAValidDataSetAndTabulatesEachRound) {
+  const std::string work = dir_.file("work");
+  const auto run = train("--dagger 1 --dagger-dir " + work +
+                         " --dagger-scenes 8 --dagger-stride 2 --dagger-eval-count 6");
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+
+  const std::string aggregated = work + "/data";
+  EXPECT_EQ(testing::run_cli("dataset-info " + aggregated).exit_code, 0);
+  const data::DatasetSummary summary = data::summarize_dataset(aggregated);
+  EXPECT_GT(summary.scenarios, 0);
+  EXPECT_GT(summary.samples, 0);
+  EXPECT_LE(summary.samples, summary.scenarios);  // one sample per query with a plan
+  EXPECT_TRUE(summary.parameters.contains("dagger"));
+  const auto before = learn::load_learning_data({data_});
+  const auto after = learn::load_learning_data({data_, aggregated});
+  EXPECT_GT(after.samples.rows(), before.samples.rows());
+
+  const auto table = read_csv(work + "/dagger.csv");
+  ASSERT_EQ(table.size(), 1U + 2U + 1U);  // header, rounds 0 and 1, miqp
+  const auto& header = table.front();
+  for (std::size_t r = 1; r < table.size(); ++r) {
+    ASSERT_EQ(table[r].size(), header.size());
+    EXPECT_EQ(table[r][1], r <= 2 ? "mlp-miqp" : "miqp");
+    EXPECT_EQ(std::stoll(table[r][2]), 6);
+    for (std::size_t c = 3; c <= 6; ++c) {
+      if (c == 4) continue;  // take-overs per rollout: not a share
+      EXPECT_GE(std::stod(table[r][c]), 0.0);
+      EXPECT_LE(std::stod(table[r][c]), 1.0);
+    }
+    EXPECT_GE(std::stod(table[r][4]), 0.0);
+  }
+  EXPECT_EQ(table[1][0], "0");
+  EXPECT_EQ(table[2][0], "1");
+  EXPECT_EQ(std::stoll(table[2][8]), after.samples.rows() - before.samples.rows());
+  EXPECT_EQ(std::stoll(table[2][7]), std::stoll(table[2][8]));  // one node per query
+
+  // --out holds the last round's model: a new network, the base's classifiers.
+  const learn::Model model = learn::Model::load(dir_.file("model"));
+  const learn::Model base = learn::Model::load(work + "/model-0");
+  EXPECT_TRUE(model.description().contains("retrained_network"));
+  EXPECT_EQ(model.description()["data"]["datasets"].size(), 2U);
+  const auto& files = model.description()["files"];
+  const auto& base_files = base.description()["files"];
+  EXPECT_EQ(files["classifiers/plain/svm.libsvm"], base_files["classifiers/plain/svm.libsvm"]);
+  EXPECT_NE(files["policy.json"], base_files["policy.json"]);
+
+  // The same command again finds every step done and tabulates the same.
+  const std::string csv = testing::read_text(work + "/dagger.csv");
+  const auto again = train("--dagger 1 --dagger-dir " + work +
+                           " --dagger-scenes 8 --dagger-stride 2 --dagger-eval-count 6");
+  ASSERT_EQ(again.exit_code, 0) << again.output;
+  EXPECT_EQ(again.output.find("expert queries"), std::string::npos) << again.output;
+  EXPECT_EQ(testing::read_text(work + "/dagger.csv"), csv);
+}
+
+TEST_F(DaggerCli, BadOptionsAreRefusedAndWriteNothing) {
+  const std::string work = dir_.file("work");
+  for (const char* bad : {"--dagger -1", "--dagger 1 --dagger-scenes 0",
+                          "--dagger 1 --dagger-stride 0", "--dagger 1 --dagger-eval-seed 7001",
+                          "--dagger 1 --dagger-label-nodes -1", "--dagger-scenes 5"}) {
+    std::string options = bad;
+    options += " --dagger-dir ";
+    options += work;
+    const auto run = train(options);
+    EXPECT_EQ(run.exit_code, 2) << bad << ": " << run.output;
+    EXPECT_FALSE(fs::exists(work)) << bad;
+  }
+  const auto missing = testing::run_cli("train --data " + dir_.file("nowhere") + " --out " +
+                                        dir_.file("model") + " --dagger 1");
+  EXPECT_EQ(missing.exit_code, 2) << missing.output;
+  EXPECT_FALSE(fs::exists(dir_.file("model")));
+}
+
+}  // namespace
+}  // namespace lanechange
