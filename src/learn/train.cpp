@@ -462,7 +462,9 @@ TrainReport retrain_network(const RetrainOptions& options) {
   train.network = options.network;
   train.plots = options.plots;
   train.progress = options.progress;
-  const auto [out, staging] = staging_for(options.out_dir);
+  // Named, not a structured binding: the lambda below captures it.
+  const auto [out, staging_dir] = staging_for(options.out_dir);
+  const fs::path staging = staging_dir;
   const json metrics =
       lanechange::detail::read_json_file((fs::path(options.base_model) / "metrics.json").string());
   Context c{train, data, split, Seeds(train.seed), staging, base, metrics};
