@@ -44,18 +44,22 @@ std::vector<EgoFootprint> footprint_of(const MpcPlan& plan) {
 // within `gate` of touching them: the rows of far cars cost Ipopt time (its
 // linear solves grow with them) and never bind. The rest are kept to check.
 void add_obstacles(MpcProblemData& data, const Scenario& scene, const TrafficPrediction& cars,
-                   const Circles& circles, const MpcPlan& guess, double gate) {
+                   const MpcSettings& settings, const MpcPlan& guess) {
   const auto nodes = static_cast<std::size_t>(data.steps) + 1;
   data.obstacles.assign(nodes, {});
   data.pruned.assign(nodes, {});
-  const double reach = scene.vehicle.length + std::sqrt(data.clearance_squared) + gate;
-  for (std::size_t k = 1; k < nodes; ++k) {
-    for (const Car c : kAllCars) {
+  for (const Car c : kAllCars) {
+    const VehicleSize size = scene.size_of(c);
+    const Circles circles = body_circles(size, settings.circles);
+    const double clearance = data.ego_radius + circles.radius + settings.margin;
+    const double reach =
+        0.5 * (scene.vehicle.length + size.length) + clearance + settings.gate_distance;
+    for (std::size_t k = 1; k < nodes; ++k) {
       const double x = cars.car(c).x[k];
-      const EgoState& ego = guess.states[k];
-      const bool near = std::abs(ego.x - x) <= reach;
+      const bool near = std::abs(guess.states[k].x - x) <= reach;
       for (const double offset : circles.offsets) {
-        (near ? data.obstacles : data.pruned)[k].push_back({x + offset, scene.lane_center(c)});
+        (near ? data.obstacles : data.pruned)[k].push_back(
+            {x + offset, scene.lane_center(c), clearance});
       }
     }
   }
@@ -160,13 +164,12 @@ MpcProblemData build_mpc_problem(const Scenario& scene, const Config& base, cons
   data.omega = scene.limits.omega;
   const Circles circles = body_circles(scene.vehicle, config.mpc.circles);
   data.ego_offsets = circles.offsets;
-  const double clearance = 2.0 * circles.radius + config.mpc.margin;
-  data.clearance_squared = clearance * clearance;
+  data.ego_radius = circles.radius;
   const auto path = footprint_of(guess);
   const TrafficPrediction cars = scene.behavior == Behavior::Idm
                                      ? predict_traffic(scene, config, data.steps, data.dt, &path)
                                      : predict_traffic(scene, config, data.steps, data.dt);
-  add_obstacles(data, scene, cars, circles, guess, config.mpc.gate_distance);
+  add_obstacles(data, scene, cars, config.mpc, guess);
   if (config.mpc.terminal_gap) add_terminal_gap(data, scene, cars);
   return data;
 }

@@ -58,13 +58,12 @@ PairDistance pair_distance(const Number* node, double offset, const CircleCentre
 double clearance_violation(const MpcProblemData& data, const MpcPlan& plan,
                            const std::vector<std::vector<CircleCentre>>& centres) {
   double worst = 0.0;
-  const double clearance = std::sqrt(data.clearance_squared);
   for (std::size_t k = 1; k < centres.size() && k < plan.states.size(); ++k) {
     const EgoState& z = plan.states[k];
     const Number node[] = {z.x, z.y, z.v, z.theta};
     for (const CircleCentre& c : centres[k]) {
       for (const double offset : data.ego_offsets) {
-        worst = std::max(worst, clearance - std::sqrt(pair_distance(node, offset, c).value));
+        worst = std::max(worst, c.clearance - std::sqrt(pair_distance(node, offset, c).value));
       }
     }
   }
@@ -160,8 +159,15 @@ bool MpcNlp::get_bounds_info(Index n, Number* x_l, Number* x_u, Index m, Number*
     g_l[row] = -kInfinity;
     g_u[row++] = data_.gap_front;
   }
-  std::fill(g_l + row, g_l + m, data_.clearance_squared);
+  // One row per pair of an ego circle and a car circle, in eval_g's order.
   std::fill(g_u + row, g_u + m, kInfinity);
+  for (int k = 1; k <= data_.steps; ++k) {
+    for (const CircleCentre& c : data_.obstacles[static_cast<std::size_t>(k)]) {
+      for (std::size_t e = 0; e < data_.ego_offsets.size(); ++e) {
+        g_l[row++] = c.clearance * c.clearance;
+      }
+    }
+  }
   return true;
 }
 

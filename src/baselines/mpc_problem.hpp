@@ -19,6 +19,9 @@ using Ipopt::Number;
 struct CircleCentre {
   double x = 0.0;
   double y = 0.0;
+  /// The least distance of an ego circle's centre from this one: both
+  /// radii and the margin (a truck's circles are wider than a car's).
+  double clearance = 0.0;
 };
 
 /// A plan over `steps` steps: states at steps + 1 nodes, controls per step.
@@ -45,8 +48,7 @@ struct MpcProblemData {
   Interval omega;
   /// Offsets of the ego's circle centres along its heading, from its centre.
   std::vector<double> ego_offsets;
-  /// (2 r + margin)^2: the least squared distance of two circle centres.
-  double clearance_squared = 0.0;
+  double ego_radius = 0.0;  ///< of each of the ego's circles
   /// obstacles[k]: the other cars' circle centres at node k (k = 0 unused).
   std::vector<std::vector<CircleCentre>> obstacles;
   /// The circles left out of the rows (too far from the starting point to

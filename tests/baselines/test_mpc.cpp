@@ -142,6 +142,38 @@ TEST(Mpc, StaysInItsLaneWithoutCollisionWhereThereIsNoGap) {
   EXPECT_GT(r.metrics.fallbacks, 0);
 }
 
+// A truck's circles are wider and reach further along the lane than a car's.
+TEST(Mpc, ATrucksCirclesKeepTheirOwnClearance) {
+  const Config config;
+  Scenario s = testing::open_road_scenario();
+  s.leader = {12.0, 8.0, 0.0};
+  const baselines::MpcPlan guess = baselines::cold_guess(s);
+  const auto car = baselines::build_mpc_problem(s, config, guess);
+  s.car_size[static_cast<std::size_t>(Car::Leader)] = VehicleSize{12.0, 2.5};
+  const auto truck = baselines::build_mpc_problem(s, config, guess);
+  const auto widest = [](const baselines::MpcProblemData& d) {
+    double out = 0.0;
+    for (const auto& node : d.obstacles) {
+      for (const auto& c : node) out = std::max(out, c.clearance);
+    }
+    return out;
+  };
+  EXPECT_GT(widest(truck), widest(car));
+  const auto reach = [](const baselines::MpcProblemData& d) {
+    double out = 0.0;
+    for (const auto& node : d.obstacles) {
+      for (const auto& c : node) {
+        if (c.y == 0.0) out = std::max(out, c.x - node.front().x);
+      }
+    }
+    return out;
+  };
+  EXPECT_GT(reach(truck), reach(car));
+  // The ego's own circles are the same either way.
+  EXPECT_EQ(truck.ego_offsets, car.ego_offsets);
+  EXPECT_DOUBLE_EQ(truck.ego_radius, car.ego_radius);
+}
+
 TEST(Mpc, SampledRolloutsAreConsistent) {
   const ScenarioSampler sampler(untimed_mpc_config(), 5);
   for (std::uint64_t i = 0; i < 3; ++i) {
