@@ -68,7 +68,7 @@ void run_generate(const GenerateArgs& args, const ConfigSource& config) {
 
 }  // namespace
 
-void add_generate(CLI::App& app, ConfigSource config) {
+void add_generate(CLI::App& app, const ConfigSource& config) {
   auto* cmd = app.add_subcommand(
       "generate", "Plan N sampled scenarios with the expert and write a data set (resumable)");
   static GenerateArgs args;

@@ -10,7 +10,7 @@
 
 namespace lanechange::app {
 
-void add_experiments(CLI::App& app, ConfigSource config_source) {
+void add_experiments(CLI::App& app, const ConfigSource& config_source) {
   auto* cmd = app.add_subcommand(
       "experiments",
       "Run the paper's experiments end to end and write report.md and report.html (resumable)");

@@ -5,6 +5,6 @@
 
 namespace lanechange::app {
 
-void add_experiments(CLI::App& app, ConfigSource config);
+void add_experiments(CLI::App& app, const ConfigSource& config);
 
 }  // namespace lanechange::app

@@ -95,7 +95,7 @@ void add_dagger_options(CLI::App& cmd, TrainArgs& a) {
 
 }  // namespace
 
-void add_train(CLI::App& app, ConfigSource config) {
+void add_train(CLI::App& app, const ConfigSource& config) {
   auto* cmd = app.add_subcommand(
       "train", "Train the five classifiers and the action network on expert data sets");
   static TrainArgs args;

@@ -6,7 +6,7 @@
 namespace lanechange::app {
 
 /// `train` (with `--dagger R`: docs/strategy.md) and `model-info` (docs/learning.md).
-void add_train(CLI::App& app, ConfigSource config);
+void add_train(CLI::App& app, const ConfigSource& config);
 void add_model_info(CLI::App& app);
 
 }  // namespace lanechange::app

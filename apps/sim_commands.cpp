@@ -30,7 +30,7 @@ std::string planner_help() {
 
 }  // namespace
 
-void add_simulate(CLI::App& app, ConfigSource config_source) {
+void add_simulate(CLI::App& app, const ConfigSource& config_source) {
   auto* cmd = app.add_subcommand("simulate", "Run one closed-loop rollout of a planner");
   static std::string scenario_path;
   static std::string planner_name = "miqp";
@@ -60,7 +60,7 @@ void add_simulate(CLI::App& app, ConfigSource config_source) {
   });
 }
 
-void add_evaluate(CLI::App& app, ConfigSource config_source) {
+void add_evaluate(CLI::App& app, const ConfigSource& config_source) {
   auto* cmd = app.add_subcommand(
       "evaluate", "Closed-loop rollouts of sampled scenarios for one or more planners (resumable)");
   static sim::EvaluateOptions o;
@@ -103,7 +103,7 @@ void add_evaluate(CLI::App& app, ConfigSource config_source) {
   });
 }
 
-void add_strategy_study(CLI::App& app, ConfigSource config_source) {
+void add_strategy_study(CLI::App& app, const ConfigSource& config_source) {
   auto* cmd = app.add_subcommand(
       "strategy-study",
       "strategy-qp against the exact expert on sampled scenes, open loop (docs/strategy.md)");
