@@ -1,6 +1,7 @@
 #include "baselines/sampling.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 
 #include "lanechange/geometry.hpp"
@@ -23,6 +24,14 @@ double min_separation(std::span<const EgoState> path, const TrafficPrediction& c
                       const Scenario& scene, double cap) {
   const double length = scene.vehicle.length;
   const double width = scene.vehicle.width;
+  // Two boxes whose centres are further apart than their circumscribed
+  // circles plus the cap cannot come closer than the cap.
+  std::array<double, 3> reach{};
+  for (const Car c : kAllCars) {
+    const VehicleSize size = scene.size_of(c);
+    reach[static_cast<std::size_t>(c)] =
+        0.5 * (std::hypot(length, width) + std::hypot(size.length, size.width)) + cap;
+  }
   const int nodes = std::min(static_cast<int>(path.size()), cars.nodes());
   double closest = cap;
   for (int k = 0; k < nodes; ++k) {
@@ -31,12 +40,8 @@ double min_separation(std::span<const EgoState> path, const TrafficPrediction& c
     for (const Car c : kAllCars) {
       const double x = cars.car(c).x[static_cast<std::size_t>(k)];
       const double y = scene.lane_center(c);
+      if (std::hypot(x - e.x, y - e.y) > reach[static_cast<std::size_t>(c)]) continue;
       const VehicleSize size = scene.size_of(c);
-      // Two boxes whose centres are further apart than their circumscribed
-      // circles plus the cap cannot come closer than the cap.
-      const double reach =
-          0.5 * (std::hypot(length, width) + std::hypot(size.length, size.width)) + cap;
-      if (std::hypot(x - e.x, y - e.y) > reach) continue;
       closest = std::min(closest, -overlap_depth(ego, {x, y, 0.0, size.length, size.width}));
     }
   }
