@@ -89,7 +89,11 @@ void add_dagger_options(CLI::App& cmd, TrainArgs& a) {
       cmd.add_option("--dagger-label-nodes", d.label_nodes,
                      "Nodes kept of each expert plan, from the visited state (0: all)"),
       cmd.add_option("--dagger-eval-count", d.eval_count, "Held-out scenes per evaluation"),
-      cmd.add_option("--dagger-eval-seed", d.eval_seed, "Sampler seed of the held-out scenes")};
+      cmd.add_option("--dagger-eval-seed", d.eval_seed, "Sampler seed of the held-out scenes"),
+      cmd.add_flag("--dagger-every-scene", d.every_scene,
+                   "Roll out also on scenes the classifier refuses (the first version)"),
+      cmd.add_flag("--dagger-validate-all", d.validate_on_dagger,
+                   "Early stopping of a retrain also on DAgger rows (the first version)")};
   for (CLI::Option* option : a.dagger_only) option->capture_default_str();
 }
 

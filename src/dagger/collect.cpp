@@ -31,6 +31,14 @@ Query first_nodes(data::detail::PlanOutcome outcome, double t, int nodes) {
   return {std::move(outcome)};
 }
 
+// mlp-miqp never lets the network drive a refused scene, so its states
+// there are not the network's distribution; most of their labels were
+// ill-posed plans that train nothing.
+bool rolled_out(const Scenario& scene, const planner::MlpMiqpPlanner& learner,
+                const Labelling& labelling) {
+  return labelling.every_scene || learner.tries(scene);
+}
+
 class LearnerSession final : public planner::PlannerSession {
  public:
   LearnerSession(const planner::MlpMiqpPlanner& learner, const Labelling& labelling,
@@ -76,6 +84,7 @@ class LearnerPlanner final : public planner::ClosedLoopPlanner {
 
 std::vector<Query> collect_scene(const Scenario& scene, const planner::MlpMiqpPlanner& learner,
                                  const Config& config, const Labelling& labelling) {
+  if (!rolled_out(scene, learner, labelling)) return {};
   // The expert's queries are labelling, not driving: they must never count
   // as an overrun that hands the step to the fallback.
   Config untimed = config;
@@ -91,12 +100,14 @@ RoundData collect_round(const CollectJob& job, const std::string& dir, long long
   const ScenarioSampler sampler(job.config, job.scene_seed);
   std::vector<std::vector<Query>> per_scene(static_cast<std::size_t>(job.scenes));
   std::atomic<long long> next{0};
+  std::atomic<long long> refused{0};
   data::Progress progress(job.progress, false, job.scenes, -1.0, "dagger", "learner rollouts");
   auto work = [&] {
     for (long long i = next++; i < job.scenes; i = next++) {
       const Scenario scene = sampler.sample(static_cast<std::uint64_t>(job.first_scene + i));
       per_scene[static_cast<std::size_t>(i)] =
           collect_scene(scene, job.learner, job.config, job.labelling);
+      if (!rolled_out(scene, job.learner, job.labelling)) ++refused;
       progress.add(1);
     }
   };
@@ -110,6 +121,7 @@ RoundData collect_round(const CollectJob& job, const std::string& dir, long long
 
   RoundData out;
   out.range = {shard, first_index, 0};
+  out.refused = refused;
   data::detail::ShardFiles files(dir, shard);
   for (long long i = 0; i < job.scenes; ++i) {
     const auto scene_index = static_cast<std::uint64_t>(job.first_scene + i);

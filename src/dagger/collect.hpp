@@ -24,10 +24,14 @@ struct Labelling {
   int stride = 1;  ///< every stride-th step the network drives
   int nodes = 1;   ///< of each plan, from node 0; 0: the whole plan
   double time_limit_s = 60.0;
+  /// Roll out on scenes the classifier refuses too (the first version's
+  /// behaviour); by default only where mlp-miqp would let the network drive.
+  bool every_scene = false;
 };
 
-/// Rolls the learner's network out on `scene` (no classifier, no take-over)
-/// and asks `learner`'s expert for a plan at the states `labelling` names.
+/// Rolls the learner's network out on `scene` (no take-over) and asks
+/// `learner`'s expert for a plan at the states `labelling` names; no queries
+/// where the classifier refuses the scene, unless labelling.every_scene.
 [[nodiscard]] std::vector<Query> collect_scene(const Scenario& scene,
                                                const planner::MlpMiqpPlanner& learner,
                                                const Config& config, const Labelling& labelling);
@@ -36,6 +40,7 @@ struct RoundData {
   data::detail::ShardRange range;  ///< the shard written
   long long labelled = 0;          ///< queries answered with a well-posed plan
   long long samples = 0;           ///< rows of those plans in the samples file
+  long long refused = 0;           ///< scenes the classifier refused (not rolled out)
 };
 
 /// Collects the labels of scenes [first_scene, first_scene + scenes) on

@@ -69,6 +69,8 @@ json run_parameters(const DaggerOptions& o) {
           {"eval_seed", o.eval_seed},
           {"label_time_limit_s", o.label_time_limit_s},
           {"max_epochs", o.train.network.max_epochs},
+          {"every_scene", o.every_scene},
+          {"validate_on_dagger", o.validate_on_dagger},
           {"config", config}};
 }
 
@@ -188,10 +190,11 @@ void add_round(Aggregate& a, const DaggerOptions& o, int round, std::ostream* pr
   const planner::MlpMiqpPlanner learner(o.config, model,
                                         std::make_shared<expert::FastLaneChangeSolver>());
   fs::create_directories(data_dir(o));
-  const detail::CollectJob job{learner,      o.config,
-                               o.scene_seed, (round - 1) * o.scenes,
-                               o.scenes,     {o.stride, o.label_nodes, o.label_time_limit_s},
-                               o.jobs,       progress};
+  const detail::CollectJob job{
+      learner,      o.config,
+      o.scene_seed, (round - 1) * o.scenes,
+      o.scenes,     {o.stride, o.label_nodes, o.label_time_limit_s, o.every_scene},
+      o.jobs,       progress};
   const detail::RoundData got = detail::collect_round(job, data_dir(o), round - 1, a.count());
   a.shards.push_back(got.range);
   a.labelled.push_back(got.labelled);
@@ -202,6 +205,7 @@ void add_round(Aggregate& a, const DaggerOptions& o, int round, std::ostream* pr
                                               {"first", got.range.first},
                                               {"count", got.range.count},
                                               {"first_scene", job.first_scene},
+                                              {"scenes_refused", got.refused},
                                               {"well_posed_labels", got.labelled},
                                               {"well_posed_samples", got.samples}});
   a.parameters["count"] = a.count();
@@ -210,8 +214,9 @@ void add_round(Aggregate& a, const DaggerOptions& o, int round, std::ostream* pr
   const json run = {{"host", host}, {"ranks", 1}, {"jobs_per_rank", o.jobs}};
   data::detail::write_manifest_of_shards(data_dir(o), a.parameters, run, a.shards);
   if (progress != nullptr) {
-    *progress << "dagger: round " << round << ": " << got.range.count << " expert queries, "
-              << got.labelled << " well-posed labels" << std::endl;
+    *progress << "dagger: round " << round << ": " << o.scenes - got.refused
+              << " scenes rolled out, " << got.range.count << " expert queries, " << got.labelled
+              << " well-posed labels" << std::endl;
   }
 }
 
@@ -314,6 +319,7 @@ DaggerReport run(const DaggerOptions& options, std::ostream* progress) {
       retrain.network = options.train.network;
       retrain.plots = options.train.plots;
       retrain.progress = options.train.progress;
+      retrain.validate_on_added = options.validate_on_dagger;
       retrain.note = {{"dagger_round", r}, {"data", data_dir(options)}};
       (void)learn::retrain_network(retrain);
     }

@@ -79,6 +79,7 @@ struct Context {
   fs::path dir;  // staging directory
   json model;    // model.json in the making
   json metrics;
+  std::vector<char> validation_pool;  // rows that may validate; empty: every one
 
   void say(const std::string& line) const {
     if (options.progress != nullptr) *options.progress << "train: " << line << std::endl;
@@ -211,7 +212,9 @@ json policy_errors(const Policy& policy, const SampleTable& s, const std::vector
 std::vector<char> validation_scenarios(const Context& c) {
   std::vector<int> well_posed;
   for (int r : c.split.train) {
-    if (c.data.scenarios.label[static_cast<std::size_t>(r)] == kWellPosed) well_posed.push_back(r);
+    const auto row = static_cast<std::size_t>(r);
+    const bool pooled = c.validation_pool.empty() || c.validation_pool[row] != 0;
+    if (pooled && c.data.scenarios.label[row] == kWellPosed) well_posed.push_back(r);
   }
   if (well_posed.size() < 2)
     throw InputError("--data", "needs at least two well-posed training plans");
@@ -401,7 +404,7 @@ TrainReport train_models(const TrainOptions& options) {
   const Split split = split_scenarios(data.scenarios.rows(), options.test_share, options.seed);
   const auto [out, staging] = staging_for(options.out_dir);
   fs::create_directories(staging);
-  Context c{options, data, split, Seeds(options.seed), staging, json::object(), json::object()};
+  Context c{options, data, split, Seeds(options.seed), staging, json::object(), json::object(), {}};
   return build_and_publish(c, out, start, [&] {
     c.say("read " + std::to_string(data.scenarios.rows()) + " scenarios and " +
           std::to_string(data.samples.rows()) + " well-posed samples from " +
@@ -429,21 +432,28 @@ namespace {
 
 // The base model's split for the data sets it was trained on (found by
 // their manifests' checksums); every row of another data set trains.
-Split base_split(const LearningData& data, const json& base) {
+struct BaseSplit {
+  Split split;
+  std::vector<char> base_rows;  // rows of the data sets the base was trained on
+};
+
+BaseSplit base_split(const LearningData& data, const json& base) {
   std::map<std::string, std::set<long long>> test_of;
   for (const json& d : base.at("data").at("datasets")) {
     const auto indices = d.at("test_indices").get<std::vector<long long>>();
     test_of[d.at("manifest_crc32").get<std::string>()] = {indices.begin(), indices.end()};
   }
-  Split split;
+  BaseSplit out;
+  out.base_rows.assign(static_cast<std::size_t>(data.scenarios.rows()), 0);
   for (int r = 0; r < data.scenarios.rows(); ++r) {
     const auto row = static_cast<std::size_t>(r);
     const auto& id = data.datasets[static_cast<std::size_t>(data.scenarios.dataset[row])];
     const auto it = test_of.find(id.manifest_crc32);
+    out.base_rows[row] = it != test_of.end() ? 1 : 0;
     const bool test = it != test_of.end() && it->second.count(data.scenarios.index[row]) > 0;
-    (test ? split.test : split.train).push_back(r);
+    (test ? out.split.test : out.split.train).push_back(r);
   }
-  return split;
+  return out;
 }
 
 }  // namespace
@@ -456,7 +466,7 @@ TrainReport retrain_network(const RetrainOptions& options) {
   if (data.config != base.at("expert_config")) {
     throw InputError("--data", "the data sets' expert config is not the base model's");
   }
-  const Split split = base_split(data, base);
+  const BaseSplit split = base_split(data, base);
   TrainOptions train;
   train.seed = base.at("config").at("seed").get<std::uint64_t>();
   train.network = options.network;
@@ -467,13 +477,17 @@ TrainReport retrain_network(const RetrainOptions& options) {
   const fs::path staging = staging_dir;
   const json metrics =
       lanechange::detail::read_json_file((fs::path(options.base_model) / "metrics.json").string());
-  Context c{train, data, split, Seeds(train.seed), staging, base, metrics};
+  // The base's own validation rows, in the same order, give the same inner
+  // split as the base's: early stopping is then like for like.
+  std::vector<char> pool = options.validate_on_added ? std::vector<char>{} : split.base_rows;
+  Context c{train, data, split.split, Seeds(train.seed), staging, base, metrics, std::move(pool)};
   return build_and_publish(c, out, start, [&] {
     fs::copy(options.base_model, staging, fs::copy_options::recursive);
     train_action_network(c);
     c.model["data"] = describe_data(c);
     c.model["retrained_network"] = {{"base_model", options.base_model}, {"note", options.note}};
     c.metrics["data"]["samples_network"] = data.samples.rows();
+    c.metrics["network"]["validation"] = options.validate_on_added ? "all data sets" : "base's";
     c.metrics["wall_s_retrain"] = seconds_since(start);
   });
 }

@@ -112,15 +112,19 @@ MlpMiqpPlanner::MlpMiqpPlanner(Config config, const std::shared_ptr<const learn:
     : MlpMiqpPlanner(std::move(config), scene_classifier(model), network_of(model),
                      std::move(solver)) {}
 
-std::unique_ptr<PlannerSession> MlpMiqpPlanner::start(const Scenario& scene) const {
-  return std::make_unique<MlpMiqpSession>(*this, classify_(scene));
+bool MlpMiqpPlanner::tries(const Scenario& scene) const {
+  return classify_(scene) != static_cast<int>(Label::Failure);
 }
 
-MlpMiqpSession::MlpMiqpSession(const MlpMiqpPlanner& planner, int scene_class)
+std::unique_ptr<PlannerSession> MlpMiqpPlanner::start(const Scenario& scene) const {
+  return std::make_unique<MlpMiqpSession>(*this, tries(scene));
+}
+
+MlpMiqpSession::MlpMiqpSession(const MlpMiqpPlanner& planner, bool tries)
     : planner_(planner),
       keeper_(planner.config()),
       expert_(planner.expert(), planner.config()),
-      give_up_(scene_class == static_cast<int>(Label::Failure)) {}
+      give_up_(!tries) {}
 
 Decision MlpMiqpSession::act(const Observation& o) {
   if (give_up_) {

@@ -36,6 +36,9 @@ class MlpMiqpPlanner final : public ClosedLoopPlanner {
   [[nodiscard]] std::unique_ptr<PlannerSession> start(const Scenario& scene) const override;
 
   [[nodiscard]] const Config& config() const { return config_; }
+  /// Whether the classifier lets the network try `scene` (Algorithm 1's
+  /// first test); a refused scene is left to the fallback.
+  [[nodiscard]] bool tries(const Scenario& scene) const;
   [[nodiscard]] EgoControl network(const Observation& o) const { return network_(o); }
   [[nodiscard]] const expert::ExpertPlanner& expert() const { return expert_; }
 
@@ -48,7 +51,7 @@ class MlpMiqpPlanner final : public ClosedLoopPlanner {
 
 class MlpMiqpSession final : public PlannerSession {
  public:
-  MlpMiqpSession(const MlpMiqpPlanner& planner, int scene_class);
+  MlpMiqpSession(const MlpMiqpPlanner& planner, bool tries);
   [[nodiscard]] Decision act(const Observation& observation) override;
 
  private:

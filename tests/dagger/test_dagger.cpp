@@ -8,6 +8,7 @@
 #include "lanechange/data/dataset.hpp"
 #include "lanechange/learn/learn_data.hpp"
 #include "lanechange/learn/model.hpp"
+#include "lanechange/learn/train.hpp"
 #include "test_helpers.hpp"
 
 namespace lanechange {
@@ -21,9 +22,11 @@ Config small_config() {
   return c;
 }
 
-// A learner whose "network" always asks for the same control.
-planner::MlpMiqpPlanner constant_learner(const Config& config, EgoControl u) {
-  return {config, [](const Scenario&) { return static_cast<int>(Label::WellPosed); },
+// A learner whose "network" always asks for the same control, and whose
+// classifier always says `label`.
+planner::MlpMiqpPlanner constant_learner(const Config& config, EgoControl u,
+                                         Label label = Label::WellPosed) {
+  return {config, [label](const Scenario&) { return static_cast<int>(label); },
           [u](const planner::Observation&) { return u; },
           std::make_shared<expert::FastLaneChangeSolver>()};
 }
@@ -88,6 +91,18 @@ TEST(Dagger, KeptNodesFollowTheVisitedStateOnTheRolloutsClock) {
   EXPECT_GT(b.ego[3].x, b.ego[0].x);
 }
 
+// mlp-miqp never lets the network drive a scene its classifier refuses, so
+// by default neither does DAgger; every_scene restores the first version.
+TEST(Dagger, ScenesTheClassifierRefusesAreNotRolledOut) {
+  const Config config = small_config();
+  const planner::MlpMiqpPlanner refusing = constant_learner(config, {0.0, 0.0}, Label::Failure);
+  const Scenario scene = testing::open_road_scenario();
+  EXPECT_TRUE(dagger::detail::collect_scene(scene, refusing, config, {4, 1, 60.0}).empty());
+  EXPECT_FALSE(dagger::detail::collect_scene(scene, refusing, config, {4, 1, 60.0, true}).empty());
+  const planner::MlpMiqpPlanner trying = constant_learner(config, {0.0, 0.0}, Label::IllPosed);
+  EXPECT_FALSE(dagger::detail::collect_scene(scene, trying, config, {4, 1, 60.0}).empty());
+}
+
 class DaggerCli : public ::testing::Test {
  protected:
   void SetUp() override {
@@ -105,6 +120,36 @@ class DaggerCli : public ::testing::Test {
   std::string config_ = dir_.file("config.json");
   std::string data_ = dir_.file("data");
 };
+
+// The retrain stops early on exactly the base's validation rows, so every
+// DAgger row trains; with validate_on_added, some DAgger rows validate.
+void expect_like_for_like_validation(const std::string& work, long long dagger_rows) {
+  const auto metrics = [&](const std::string& model) {
+    return nlohmann::json::parse(testing::read_text(work + "/" + model + "/metrics.json"))
+        .at("network");
+  };
+  const auto base = metrics("model-0");
+  const auto retrained = metrics("model-1");
+  EXPECT_EQ(retrained["validation_rows"], base["validation_rows"]);
+  EXPECT_EQ(retrained["train_rows"].get<long long>(),
+            base["train_rows"].get<long long>() + dagger_rows);
+  EXPECT_EQ(retrained["test_rows"], base["test_rows"]);
+
+  learn::RetrainOptions all;
+  all.base_model = work + "/model-0";
+  all.data_dirs = nlohmann::json::parse(testing::read_text(work + "/dagger.json"))
+                      .at("data")
+                      .get<std::vector<std::string>>();
+  all.data_dirs.push_back(work + "/data");
+  all.out_dir = work + "/model-all";
+  all.network.max_epochs = 2;
+  all.plots = false;
+  all.validate_on_added = true;
+  const auto mixed = learn::retrain_network(all).metrics.at("network");
+  EXPECT_GT(mixed["validation_rows"].get<long long>() + mixed["train_rows"].get<long long>(),
+            base["validation_rows"].get<long long>() + base["train_rows"].get<long long>());
+  EXPECT_NE(mixed["validation_rows"], base["validation_rows"]);
+}
 
 TEST_F(DaggerCli, OneRoundAddsLabelsAsAValidDataSetAndTabulatesEachRound) {
   const std::string work = dir_.file("work");
@@ -151,6 +196,7 @@ TEST_F(DaggerCli, OneRoundAddsLabelsAsAValidDataSetAndTabulatesEachRound) {
   const auto& base_files = base.description()["files"];
   EXPECT_EQ(files["classifiers/plain/svm.libsvm"], base_files["classifiers/plain/svm.libsvm"]);
   EXPECT_NE(files["policy.json"], base_files["policy.json"]);
+  expect_like_for_like_validation(work, after.samples.rows() - before.samples.rows());
 
   // The same command again finds every step done and tabulates the same.
   const std::string csv = testing::read_text(work + "/dagger.csv");
@@ -163,9 +209,10 @@ TEST_F(DaggerCli, OneRoundAddsLabelsAsAValidDataSetAndTabulatesEachRound) {
 
 TEST_F(DaggerCli, BadOptionsAreRefusedAndWriteNothing) {
   const std::string work = dir_.file("work");
-  for (const char* bad : {"--dagger -1", "--dagger 1 --dagger-scenes 0",
-                          "--dagger 1 --dagger-stride 0", "--dagger 1 --dagger-eval-seed 7001",
-                          "--dagger 1 --dagger-label-nodes -1", "--dagger-scenes 5"}) {
+  for (const char* bad :
+       {"--dagger -1", "--dagger 1 --dagger-scenes 0", "--dagger 1 --dagger-stride 0",
+        "--dagger 1 --dagger-eval-seed 7001", "--dagger 1 --dagger-label-nodes -1",
+        "--dagger-scenes 5", "--dagger-every-scene", "--dagger-validate-all"}) {
     std::string options = bad;
     options += " --dagger-dir ";
     options += work;

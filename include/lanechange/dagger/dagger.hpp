@@ -27,8 +27,14 @@ struct DaggerOptions {
   long long eval_count = 100;        ///< held-out scenes per evaluation
   std::uint64_t eval_seed = 2026;    ///< must differ from scene_seed and the data's seeds
   double label_time_limit_s = 60.0;  ///< per expert plan, as `generate`'s default
-  Config config;                     ///< the closed loop's (rollouts, labels, evaluations)
-  int jobs = 0;                      ///< threads; 0: one per core
+  /// Roll the learner out on scenes the classifier refuses too (the first
+  /// version's behaviour); by default only where mlp-miqp lets it drive.
+  bool every_scene = false;
+  /// Early stopping of a retrain also on DAgger rows (the first version's
+  /// behaviour); by default on the base's own validation rows only.
+  bool validate_on_dagger = false;
+  Config config;  ///< the closed loop's (rollouts, labels, evaluations)
+  int jobs = 0;   ///< threads; 0: one per core
 };
 
 /// One row of dagger.csv: mlp-miqp with round r's model (round 0: before

@@ -44,13 +44,17 @@ TrainReport train_models(const TrainOptions& options);
 /// the base model's other parts (classifiers, strategy model, split) are
 /// kept; the network is trained afresh, with the base model's seed, on the
 /// well-posed plans of every data set given. Rows of the data sets the base
-/// was trained on keep its train/test split; rows of any other data set all
-/// train. The data sets must share the base model's expert config.
+/// was trained on keep its train/test split and, by default, its validation
+/// rows (early stopping); rows of any other data set all train. The data
+/// sets must share the base model's expert config.
 struct RetrainOptions {
   std::string base_model;
   std::vector<std::string> data_dirs;
   std::string out_dir;  ///< written atomically, as train_models does
   NetworkSettings network;
+  /// Draw validation rows from the other data sets too (DAgger's first
+  /// version): their rows then stop the training early, unlike the base's.
+  bool validate_on_added = false;
   bool plots = true;
   std::ostream* progress = nullptr;
   nlohmann::json note;  ///< recorded in model.json ("retrained_network")
