@@ -189,6 +189,11 @@ struct ClosedLoopSettings {
   double keeper_lateral_gain = 0.08;  ///< rad per m of offset from the lane centre (lane keeper)
   double keeper_heading_gain = 1.2;   ///< 1/s: yaw rate per rad of heading error
   double lookahead = 1.0;             ///< s the hierarchical planner checks its policy ahead
+  /// Steps between the expert's checks of a scene the hierarchical planner's
+  /// classifier refused, from the first step on; the first plan it finds
+  /// takes over. 0 is the paper's Algorithm 1: a refused scene is left to the
+  /// fallback for good (docs/closed_loop.md).
+  int refusal_check_period = 10;
 };
 
 /// The paper's MPC baseline (docs/baselines.md, "mpc"). Its horizon, dt,

@@ -124,14 +124,12 @@ MlpMiqpSession::MlpMiqpSession(const MlpMiqpPlanner& planner, bool tries)
     : planner_(planner),
       keeper_(planner.config()),
       expert_(planner.expert(), planner.config()),
-      give_up_(!tries) {}
+      refused_(!tries) {}
 
 Decision MlpMiqpSession::act(const Observation& o) {
-  if (give_up_) {
-    return {fallback_control(keeper_, o), ActStatus::Fallback,
-            "the classifier expects no lane change to succeed"};
-  }
+  if (refused_) return refused(o);
   if (expert_in_charge_) return expert_decision(o, "");
+  y_peak_ = std::max(y_peak_, o.ego.y);
   const EgoControl u = network_control(o);
   const std::string problem = check_ahead(o, u);
   if (problem.empty()) return {u, ActStatus::Planned, ""};
@@ -150,6 +148,27 @@ Decision MlpMiqpSession::expert_decision(const Observation& o, const std::string
     d.status = ActStatus::TookOver;
     d.reason = "the expert drives since the take-over";
   }
+  return d;
+}
+
+// A refusal of the classifier is a prediction, wrong in about one scene of
+// seven (Table I); the expert checks it now and then, so a scene the expert
+// masters is not lost to the fallback for good.
+Decision MlpMiqpSession::refused(const Observation& o) {
+  const int period = planner_.config().closed_loop.refusal_check_period;
+  const std::string refusal = "the classifier expects no lane change to succeed";
+  if (period == 0 || o.step % period != 0) {
+    return {fallback_control(keeper_, o), ActStatus::Fallback, refusal};
+  }
+  Decision d = expert_.act(o);
+  if (d.status != ActStatus::Planned) {
+    d.reason = refusal + "; the expert's check agrees (" + d.reason + ")";
+    return d;
+  }
+  refused_ = false;
+  expert_in_charge_ = true;
+  d.status = ActStatus::TookOver;
+  d.reason = "take-over: " + refusal + ", but the expert's check found a plan";
   return d;
 }
 
@@ -209,6 +228,10 @@ std::string MlpMiqpSession::check_ahead(const Observation& now, EgoControl first
     }
   };
   record_cars();
+  const LabelTolerances& tolerances = config.labels;
+  const double cap =
+      tolerances.reference == ReversalReference::TargetCenter ? scene.lane_width : INFINITY;
+  std::vector<double> lateral = {std::min(y_peak_, cap), now.ego.y};
   EgoControl u = first;
   for (int k = 0; k < steps; ++k) {
     // The actuators saturate (the simulator clips the same way): a network
@@ -232,6 +255,17 @@ std::string MlpMiqpSession::check_ahead(const Observation& now, EgoControl first
     }
     if (const std::string close = too_close_in_target_lane(o, scene); !close.empty()) {
       return close + " " + std::to_string(k + 1) + " steps ahead";
+    }
+    // The judge calls a move back towards the ego lane beyond its tolerance
+    // ill-posed; the take-over comes at half of it, while it can be stopped.
+    lateral.push_back(o.ego.y);
+    if (const double back = largest_lateral_reversal(lateral, cap);
+        back > tolerances.reversal / 2.0) {
+      char what[120];
+      std::snprintf(what, sizeof what,
+                    "the network would move %.2f m back towards the ego lane %d steps ahead", back,
+                    k + 1);
+      return what;
     }
     u = network_control(o);
   }

@@ -1,4 +1,5 @@
 #pragma once
+#include <cmath>
 #include <functional>
 #include <memory>
 #include <string>
@@ -58,11 +59,15 @@ class MlpMiqpSession final : public PlannerSession {
   [[nodiscard]] EgoControl network_control(const Observation& observation) const;
   [[nodiscard]] std::string check_ahead(const Observation& now, EgoControl first) const;
   [[nodiscard]] Decision expert_decision(const Observation& observation, const std::string& why);
+  [[nodiscard]] Decision refused(const Observation& observation);
 
   const MlpMiqpPlanner& planner_;
   LaneKeeper keeper_;
   MiqpSession expert_;
-  bool give_up_ = false;
+  bool refused_ = false;
+  /// The highest y of the ego so far (capped as the judge caps it), so the
+  /// look-ahead sees a move back towards the ego lane that has begun.
+  double y_peak_ = -INFINITY;
   bool expert_in_charge_ = false;
 };
 

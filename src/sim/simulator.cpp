@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <exception>
+#include <limits>
 
 #include "lanechange/checks.hpp"
 #include "lanechange/ego.hpp"
@@ -116,8 +117,16 @@ class Loop {
   void settle_check(int node, Rollout& out) {
     if (over_) return;
     const ClosedLoopSettings& c = config_.closed_loop;
+    // The lane keeper's heading response still carries an ego that heads
+    // back towards the ego lane about v |theta| / gain further: handed over
+    // too early, that drift becomes a reversal the judge counts.
+    peak_y_ = std::max(peak_y_, ego_.y);
+    const double drift = std::max(0.0, -ego_.theta) * ego_.v / c.keeper_heading_gain;
+    const bool keeper_holds =
+        ego_.theta >= 0.0 ||
+        std::min(peak_y_, scene_.lane_width) - (ego_.y - drift) <= config_.labels.reversal / 2;
     if (std::abs(ego_.y - scene_.lane_width) <= c.settled_offset &&
-        std::abs(ego_.theta) <= c.settled_heading) {
+        std::abs(ego_.theta) <= c.settled_heading && keeper_holds) {
       over_ = true;
       out.manoeuvre_over_at = node * dt_;
     }
@@ -130,6 +139,7 @@ class Loop {
   EgoState ego_;
   double dt_ = 0.1;
   bool over_ = false;
+  double peak_y_ = -std::numeric_limits<double>::infinity();
   Trajectory path_;
 };
 

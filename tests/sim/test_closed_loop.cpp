@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <thread>
@@ -59,6 +60,30 @@ TEST(ClosedLoop, ExpertChangesLanesIntoAWideOpenGap) {
   EXPECT_FALSE(r.trajectory.collision);
   EXPECT_GT(r.manoeuvre_over_at, 0.0);
   EXPECT_NEAR(r.trajectory.ego.back().y, s.lane_width, config.labels.reach);
+}
+
+// A planner that overshoots the target-lane centre and comes back firmly
+// must not be handed to the lane keeper while the keeper's slower heading
+// response would carry the ego on below the centre: that reversal would be
+// the keeper's, judged as the planner's.
+TEST(ClosedLoop, TheKeeperTakesOverOnlyWhereItHoldsTheLane) {
+  const Config config = testing::untimed_config();
+  const Scenario s = open_road();
+  const double w = s.lane_width;
+  bool coming_back = false;
+  const ScriptedPlanner overshooting([&](const Observation& o) {
+    coming_back = coming_back || o.ego.y >= w + 0.3;
+    const double wanted = coming_back ? std::clamp(-0.4 * (o.ego.y - w), -0.1, 0.1) : 0.2;
+    return Decision{{0.0, 4.0 * (wanted - o.ego.theta)}, ActStatus::Planned, ""};
+  });
+  const sim::Rollout r = sim::simulate(s, overshooting, config);
+  ASSERT_TRUE(coming_back);
+  testing::expect_consistent(r, s);
+  std::vector<double> y;
+  for (const EgoState& e : r.trajectory.ego) y.push_back(e.y);
+  EXPECT_LE(largest_lateral_reversal(y, w), config.labels.reversal);
+  EXPECT_EQ(r.outcome, Outcome::WellPosed) << r.reason;
+  EXPECT_GT(r.manoeuvre_over_at, 0.0);
 }
 
 TEST(ClosedLoop, NoGapIsAbortedWithoutCollision) {

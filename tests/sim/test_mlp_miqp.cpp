@@ -13,9 +13,10 @@ using sim::Outcome;
 
 constexpr int kWorthTrying = static_cast<int>(Label::WellPosed);
 
-MlpMiqpPlanner forced(MlpMiqpPlanner::Network network, int scene_class = kWorthTrying) {
-  return {testing::untimed_config(), [scene_class](const Scenario&) { return scene_class; },
-          std::move(network), std::make_shared<expert::FastLaneChangeSolver>()};
+MlpMiqpPlanner forced(MlpMiqpPlanner::Network network, int scene_class = kWorthTrying,
+                      const Config& config = testing::untimed_config()) {
+  return {config, [scene_class](const Scenario&) { return scene_class; }, std::move(network),
+          std::make_shared<expert::FastLaneChangeSolver>()};
 }
 
 // A "network" that steers hard into the target lane whatever is there.
@@ -32,18 +33,56 @@ TEST(MlpMiqp, ANetworkSteeringIntoACarIsTakenOverAndNothingIsHit) {
   EXPECT_GT(r.metrics.fallbacks, 0);
 }
 
-TEST(MlpMiqp, ASceneClassedAsFailureIsNotTried) {
-  const Scenario s = testing::open_road_scenario();
-  int calls = 0;
-  const MlpMiqpPlanner p = forced(
+// A planner whose classifier refuses every scene; its network counts its calls.
+MlpMiqpPlanner refusing_counter(int& calls, const Config& config) {
+  return forced(
       [&calls](const Observation& o) {
         ++calls;
         return swerve_left(o);
       },
-      static_cast<int>(Label::Failure));
-  const sim::Rollout r = sim::simulate(s, p, testing::untimed_config());
+      static_cast<int>(Label::Failure), config);
+}
+
+// The paper's Algorithm 1 leaves a refused scene to the fallback for good.
+TEST(MlpMiqp, ASceneClassedAsFailureIsNotTriedUnderThePapersRule) {
+  Config config = testing::untimed_config();
+  config.closed_loop.refusal_check_period = 0;
+  int calls = 0;
+  const MlpMiqpPlanner p = refusing_counter(calls, config);
+  const sim::Rollout r = sim::simulate(testing::open_road_scenario(), p, config);
   EXPECT_EQ(r.outcome, Outcome::Aborted);
+  EXPECT_EQ(r.metrics.takeovers, 0);
   EXPECT_EQ(calls, 0);
+}
+
+// By default the expert checks a refusal: where it finds a plan it drives,
+// and the network is still never asked.
+TEST(MlpMiqp, AWrongRefusalIsCaughtByTheExpertsCheck) {
+  const Config config = testing::untimed_config();
+  ASSERT_GT(config.closed_loop.refusal_check_period, 0);
+  int calls = 0;
+  const MlpMiqpPlanner p = refusing_counter(calls, config);
+  const sim::Rollout r = sim::simulate(testing::open_road_scenario(), p, config);
+  EXPECT_EQ(r.outcome, Outcome::WellPosed) << r.reason;
+  EXPECT_EQ(r.metrics.takeovers, 1);
+  EXPECT_EQ(calls, 0);
+  EXPECT_NE(r.steps.front().reason.find("the expert's check found a plan"), std::string::npos)
+      << r.steps.front().reason;
+
+  // Where the expert finds no plan either, the fallback keeps the lane and
+  // the expert checks again every period, no more often.
+  const sim::Rollout blocked = sim::simulate(testing::no_gap_scenario(), p, config);
+  EXPECT_EQ(blocked.outcome, Outcome::Aborted) << blocked.reason;
+  EXPECT_FALSE(blocked.trajectory.collision);
+  const std::size_t period = static_cast<std::size_t>(config.closed_loop.refusal_check_period);
+  int checks = 0;
+  for (std::size_t k = 0; k < blocked.steps.size(); ++k) {
+    const bool checked =
+        blocked.steps[k].reason.find("the expert's check agrees") != std::string::npos;
+    EXPECT_EQ(checked, k % period == 0) << "step " << k << ": " << blocked.steps[k].reason;
+    checks += checked ? 1 : 0;
+  }
+  EXPECT_GE(checks, 2);
 }
 
 TEST(MlpMiqp, ANetworkThatDrivesWellIsNotOverruled) {
@@ -62,6 +101,30 @@ TEST(MlpMiqp, ANetworkThatDrivesWellIsNotOverruled) {
   EXPECT_FALSE(r.trajectory.collision);
   EXPECT_GT(r.manoeuvre_over_at, 0.0);
   EXPECT_EQ(r.outcome, Outcome::WellPosed) << r.reason;
+}
+
+// A network that overshoots the target lane and swings back hard towards
+// the ego lane is taken over before the move back becomes a reversal.
+TEST(MlpMiqp, ANetworkSwingingBackTowardsTheEgoLaneIsTakenOver) {
+  const Config config = testing::untimed_config();
+  const Scenario s = testing::open_road_scenario();
+  const double w = s.lane_width;
+  bool coming_back = false;
+  const MlpMiqpPlanner p = forced([&](const Observation& o) {
+    coming_back = coming_back || o.ego.y >= w + 0.3;
+    return EgoControl{0.0, 3.0 * ((coming_back ? -0.2 : 0.2) - o.ego.theta)};
+  });
+  const sim::Rollout r = sim::simulate(s, p, config);
+  ASSERT_EQ(r.metrics.takeovers, 1);
+  std::string reason;
+  for (const auto& step : r.steps) {
+    if (step.status == planner::ActStatus::TookOver) {
+      reason = step.reason;
+      break;
+    }
+  }
+  EXPECT_NE(reason.find("back towards the ego lane"), std::string::npos) << reason;
+  EXPECT_FALSE(r.trajectory.collision);
 }
 
 // The real thing: a model trained by the CLI on a small data set drives the
