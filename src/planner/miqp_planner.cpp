@@ -105,6 +105,7 @@ std::string MiqpSession::replan(const Observation& o) {
   const ExpertResult result =
       plan_function_(scene, {config_.closed_loop.step_budget_ms / 1000.0}, hints);
   last_plan_ms_ = result.total_ms;
+  last_status_ = result.status;
   if (result.status != PlanStatus::Converged) {
     return std::string(expert::to_string(result.status)) + ": " + result.reason;
   }

@@ -30,6 +30,8 @@ class MiqpSession final : public PlannerSession {
   [[nodiscard]] Decision act(const Observation& observation) override;
   /// Time of the last re-plan (ms), for benchmarks.
   [[nodiscard]] double last_plan_ms() const { return last_plan_ms_; }
+  /// How the last re-plan ended; Converged before the first.
+  [[nodiscard]] expert::PlanStatus last_status() const { return last_status_; }
 
  private:
   /// Re-plans from the observation; returns why it failed ("" on success).
@@ -43,6 +45,7 @@ class MiqpSession final : public PlannerSession {
   std::vector<int> modes_;
   int plan_step_ = 0;
   double last_plan_ms_ = 0.0;
+  expert::PlanStatus last_status_ = expert::PlanStatus::Converged;
 };
 
 /// The expert's config in closed loop (closed_loop.monotone_lateral).

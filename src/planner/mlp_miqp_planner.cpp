@@ -157,11 +157,15 @@ Decision MlpMiqpSession::expert_decision(const Observation& o, const std::string
 Decision MlpMiqpSession::refused(const Observation& o) {
   const int period = planner_.config().closed_loop.refusal_check_period;
   const std::string refusal = "the classifier expects no lane change to succeed";
-  if (period == 0 || o.step % period != 0) {
+  if (period == 0 || o.step < next_check_) {
     return {fallback_control(keeper_, o), ActStatus::Fallback, refusal};
   }
   Decision d = expert_.act(o);
   if (d.status != ActStatus::Planned) {
+    // A check cut short by its time limit decided nothing: the next step's
+    // scene, a step shorter, is checked at once.
+    const bool undecided = expert_.last_status() == expert::PlanStatus::TimeLimit;
+    next_check_ = o.step + (undecided ? 1 : period);
     d.reason = refusal + "; the expert's check agrees (" + d.reason + ")";
     return d;
   }

@@ -65,6 +65,7 @@ class MlpMiqpSession final : public PlannerSession {
   LaneKeeper keeper_;
   MiqpSession expert_;
   bool refused_ = false;
+  int next_check_ = 0;  ///< the step of the expert's next check of a refusal
   /// The highest y of the ego so far (capped as the judge caps it), so the
   /// look-ahead sees a move back towards the ego lane that has begun.
   double y_peak_ = -INFINITY;

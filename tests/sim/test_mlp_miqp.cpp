@@ -103,6 +103,33 @@ TEST(MlpMiqp, ANetworkThatDrivesWellIsNotOverruled) {
   EXPECT_EQ(r.outcome, Outcome::WellPosed) << r.reason;
 }
 
+// A check that ran out of time decided nothing, so the next step checks
+// again; a check that found no plan waits for the period.
+TEST(MlpMiqp, ARefusalCheckCutShortByItsTimeLimitIsRepeatedAtOnce) {
+  const Scenario s = testing::open_road_scenario();
+  auto checks_in_first_steps = [&s](double budget_ms) {
+    Config config = testing::untimed_config();
+    config.closed_loop.step_budget_ms = budget_ms;
+    int calls = 0;
+    const MlpMiqpPlanner p = refusing_counter(calls, config);
+    const auto session = p.start(s);
+    Observation o;
+    o.scene = &s;
+    o.ego = s.ego;
+    o.cars = {s.leader, s.follower, s.target};
+    int checks = 0;
+    for (o.step = 0; o.step < 4; ++o.step) {
+      const planner::Decision d = session->act(o);
+      checks += d.reason.find("the expert's check") != std::string::npos ? 1 : 0;
+      if (d.status == planner::ActStatus::TookOver) break;
+    }
+    EXPECT_EQ(calls, 0);
+    return checks;
+  };
+  EXPECT_EQ(checks_in_first_steps(1e-9), 4);  // every plan stops at its time limit
+  EXPECT_EQ(checks_in_first_steps(1e9), 1);   // the first plan is found and takes over
+}
+
 // A network that overshoots the target lane and swings back hard towards
 // the ego lane is taken over before the move back becomes a reversal.
 TEST(MlpMiqp, ANetworkSwingingBackTowardsTheEgoLaneIsTakenOver) {
