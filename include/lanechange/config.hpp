@@ -189,6 +189,10 @@ struct ClosedLoopSettings {
   double keeper_lateral_gain = 0.08;  ///< rad per m of offset from the lane centre (lane keeper)
   double keeper_heading_gain = 1.2;   ///< 1/s: yaw rate per rad of heading error
   double lookahead = 1.0;             ///< s the hierarchical planner checks its policy ahead
+  /// m and m/s: while the ego and the cars stay this close to where the last
+  /// look-ahead put them, the next one extends it by a step instead of
+  /// rolling the policy out again (docs/closed_loop.md); 0: roll out every step.
+  double lookahead_tolerance = 0.02;
   /// Steps between the expert's checks of a scene the hierarchical planner's
   /// classifier refused, from the first step on; the first plan it finds
   /// takes over. 0 is the paper's Algorithm 1: a refused scene is left to the

@@ -24,6 +24,7 @@ void validate_closed_loop(const ClosedLoopSettings& c) {
   require(c.keeper_lateral_gain > 0 && c.keeper_heading_gain > 0, "closed_loop",
           "the lane keeper's gains must be positive");
   require(c.lookahead >= 0, "closed_loop.lookahead", "must not be negative");
+  require(c.lookahead_tolerance >= 0, "closed_loop.lookahead_tolerance", "must not be negative");
   require(c.refusal_check_period >= 0, "closed_loop.refusal_check_period", "must not be negative");
 }
 

@@ -93,24 +93,20 @@ void prepare_work_dir(const DaggerOptions& o) {
 }
 
 RoundRow score(const std::string& rollouts_csv, const std::string& planner, int round) {
+  const std::vector<sim::RolloutRow> all = sim::read_rollouts(rollouts_csv);
+  std::vector<const sim::RolloutRow*> mine;
+  for (const sim::RolloutRow& r : all) {
+    if (r.planner == planner) mine.push_back(&r);
+  }
+  const sim::RolloutRates rates = sim::rates_of(mine);
   RoundRow row;
   row.round = round;
   row.planner = planner;
-  double takeovers = 0.0;
-  long long success = 0, collision = 0, at_fault = 0;
-  for (const sim::RolloutRow& r : sim::read_rollouts(rollouts_csv)) {
-    if (r.planner != planner) continue;
-    ++row.rollouts;
-    takeovers += r.takeovers;
-    success += r.success() ? 1 : 0;
-    collision += r.collision ? 1 : 0;
-    at_fault += r.at_fault ? 1 : 0;
-  }
-  const double n = double(std::max<long long>(row.rollouts, 1));
-  row.success_rate = double(success) / n;
-  row.takeovers_per_rollout = takeovers / n;
-  row.collision_rate = double(collision) / n;
-  row.at_fault_collision_rate = double(at_fault) / n;
+  row.rollouts = rates.rollouts;
+  row.success_rate = rates.success;
+  row.takeovers_per_rollout = rates.takeovers;
+  row.collision_rate = rates.collision;
+  row.at_fault_collision_rate = rates.at_fault;
   return row;
 }
 

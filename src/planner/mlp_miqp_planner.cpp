@@ -10,6 +10,7 @@
 #include <cstdio>
 #include <functional>
 #include <map>
+#include <span>
 
 #include "lanechange/checks.hpp"
 #include "lanechange/ego.hpp"
@@ -210,72 +211,162 @@ std::string too_close_in_target_lane(const Observation& o, const Scenario& scene
 // The policy rolled forward against the cars as their behavior predicts
 // them from now (IDM reacting to the rolled-out ego), through the planner's
 // model of the ego, its controls saturated at the limits. Empty when the
-// look-ahead stays on the road, within the speed bounds and clear of the cars.
-std::string MlpMiqpSession::check_ahead(const Observation& now, EgoControl first) const {
+// look-ahead stays on the road, within the speed bounds, out of the target
+// lane's safe distances, without a reversal and clear of the cars.
+std::string MlpMiqpSession::check_ahead(const Observation& now, EgoControl first) {
+  if (window_fits(now)) return extend_window();
+  return roll_out(now, first);
+}
+
+std::string MlpMiqpSession::roll_out(const Observation& now, EgoControl first) {
   const Config& config = planner_.config();
-  const Scenario& scene = *now.scene;
-  const Limits& limits = scene.limits;
-  const double dt = scene.horizon / scene.steps;
+  const double dt = now.scene->horizon / now.scene->steps;
   const int steps = static_cast<int>(std::lround(config.closed_loop.lookahead / dt));
-  Scenario from_now = scene_now(now, config);
-  TrafficModel traffic(from_now, config);
-  Observation o = now;
-  std::vector<EgoState> path = {now.ego};
-  TrafficPrediction predicted;
-  predicted.dt = dt;
-  auto record_cars = [&] {
-    for (const Car c : kAllCars) {
-      CarTrack& track = predicted.cars[static_cast<std::size_t>(c)];
-      track.x.push_back(traffic.car(c).x);
-      track.v.push_back(traffic.car(c).v);
-      track.a.push_back(traffic.car(c).a);
-    }
-  };
-  record_cars();
-  const LabelTolerances& tolerances = config.labels;
-  const double cap =
-      tolerances.reference == ReversalReference::TargetCenter ? scene.lane_width : INFINITY;
-  std::vector<double> lateral = {std::min(y_peak_, cap), now.ego.y};
-  EgoControl u = first;
-  for (int k = 0; k < steps; ++k) {
-    // The actuators saturate (the simulator clips the same way): a network
-    // that asks for a little more than the limit is not a danger by itself.
-    (void)clip_to_limits(u, o.ego, limits, dt);
-    traffic.step(dt, {o.ego.x, o.ego.y, o.ego.v});
-    o.ego = step_trapezoidal(o.ego, u, dt);
-    o.ego.a = u.a;
-    o.t += dt;
-    ++o.step;
-    for (const Car c : kAllCars) o.cars[static_cast<std::size_t>(c)] = traffic.car(c);
-    path.push_back(o.ego);
-    record_cars();
-    if (!limits.v.contains(o.ego.v) || !body_on_road(o.ego.y, scene)) {
-      char what[160];
-      std::snprintf(what, sizeof what,
-                    "the network leaves the speed or road bounds %d steps ahead (v %.2f m/s, "
-                    "y %.2f m)",
-                    k + 1, o.ego.v, o.ego.y);
-      return what;
-    }
-    if (const std::string close = too_close_in_target_lane(o, scene); !close.empty()) {
-      return close + " " + std::to_string(k + 1) + " steps ahead";
-    }
-    // The judge calls a move back towards the ego lane beyond its tolerance
-    // ill-posed; the take-over comes at half of it, while it can be stopped.
-    lateral.push_back(o.ego.y);
-    if (const double back = largest_lateral_reversal(lateral, cap);
-        back > tolerances.reversal / 2.0) {
-      char what[120];
-      std::snprintf(what, sizeof what,
-                    "the network would move %.2f m back towards the ego lane %d steps ahead", back,
-                    k + 1);
-      return what;
-    }
-    u = network_control(o);
+  Window& w = window_;
+  w.step = now.step;
+  w.scene = scene_now(now, config);
+  w.traffic.emplace(*w.scene, config);
+  w.ego.assign(1, now.ego);
+  w.cars = {};
+  w.cars.dt = dt;
+  for (const Car c : kAllCars) {
+    CarTrack& track = w.cars.cars[static_cast<std::size_t>(c)];
+    const CarState& car = w.traffic->car(c);
+    track.x.assign(1, car.x);
+    track.v.assign(1, car.v);
+    track.a.assign(1, car.a);
   }
-  if (const auto hit = first_collision(path, predicted, from_now)) {
+  w.last = now;
+  w.next = first;
+  for (int k = 1; k <= steps; ++k) {
+    advance_window(dt);
+    if (std::string problem = check_node(k); !problem.empty()) {
+      w.step = -1;
+      return problem;
+    }
+  }
+  if (const auto hit = first_collision(w.ego, w.cars, *w.scene)) {
+    w.step = -1;
     return "the network would hit the " + std::string(to_string(hit->car)) + " in " +
            std::to_string(hit->time) + " s";
+  }
+  return "";
+}
+
+// The window predicted at the last step still describes this one: node 1
+// is where the ego and the cars are now, within the tolerance (for the
+// heading, the error that moves the ego by the tolerance over the look-ahead).
+bool MlpMiqpSession::window_fits(const Observation& now) const {
+  const double tolerance = planner_.config().closed_loop.lookahead_tolerance;
+  if (tolerance <= 0.0 || window_.step != now.step - 1 || window_.ego.size() < 2) return false;
+  const EgoState& ego = window_.ego[1];
+  const double heading_tolerance =
+      tolerance / std::max(1.0, now.ego.v * planner_.config().closed_loop.lookahead);
+  if (std::abs(ego.x - now.ego.x) > tolerance || std::abs(ego.y - now.ego.y) > tolerance ||
+      std::abs(ego.v - now.ego.v) > tolerance ||
+      std::abs(ego.theta - now.ego.theta) > heading_tolerance) {
+    return false;
+  }
+  for (const Car c : kAllCars) {
+    const CarTrack& track = window_.cars.car(c);
+    if (std::abs(track.x[1] - now.car(c).x) > tolerance ||
+        std::abs(track.v[1] - now.car(c).v) > tolerance) {
+      return false;
+    }
+  }
+  return true;
+}
+
+// Drops node 0 and adds a node at the end: the nodes between passed their
+// checks at earlier steps, so only the new node and the new segment are checked.
+std::string MlpMiqpSession::extend_window() {
+  Window& w = window_;
+  const double dt = w.cars.dt;
+  w.ego.erase(w.ego.begin());
+  for (CarTrack& track : w.cars.cars) {
+    track.x.erase(track.x.begin());
+    track.v.erase(track.v.begin());
+    track.a.erase(track.a.begin());
+  }
+  ++w.step;
+  advance_window(dt);
+  const int ahead = static_cast<int>(w.ego.size()) - 1;
+  if (std::string problem = check_node(ahead); !problem.empty()) {
+    w.step = -1;
+    return problem;
+  }
+  segment_.dt = dt;
+  for (std::size_t c = 0; c < segment_.cars.size(); ++c) {
+    const CarTrack& from = w.cars.cars[c];
+    CarTrack& to = segment_.cars[c];
+    to.x.assign(from.x.end() - 2, from.x.end());
+    to.v.assign(from.v.end() - 2, from.v.end());
+    to.a.assign(from.a.end() - 2, from.a.end());
+  }
+  const std::span<const EgoState> last_step(w.ego.end() - 2, 2);
+  if (const auto hit = first_collision(last_step, segment_, *w.scene)) {
+    w.step = -1;
+    return "the network would hit the " + std::string(to_string(hit->car)) + " in " +
+           std::to_string(hit->time + (ahead - 1) * dt) + " s";
+  }
+  return "";
+}
+
+void MlpMiqpSession::advance_window(double dt) {
+  Window& w = window_;
+  Observation& o = w.last;
+  EgoControl u = w.next;
+  // The actuators saturate (the simulator clips the same way): a network
+  // that asks for a little more than the limit is not a danger by itself.
+  (void)clip_to_limits(u, o.ego, o.scene->limits, dt);
+  w.traffic->step(dt, {o.ego.x, o.ego.y, o.ego.v});
+  o.ego = step_trapezoidal(o.ego, u, dt);
+  o.ego.a = u.a;
+  o.t += dt;
+  ++o.step;
+  w.ego.push_back(o.ego);
+  for (const Car c : kAllCars) {
+    const CarState& car = w.traffic->car(c);
+    o.cars[static_cast<std::size_t>(c)] = car;
+    CarTrack& track = w.cars.cars[static_cast<std::size_t>(c)];
+    // The acceleration applied from the last node on is known only now.
+    track.a.back() = car.a;
+    track.x.push_back(car.x);
+    track.v.push_back(car.v);
+    track.a.push_back(car.a);
+  }
+  w.next = network_control(o);
+}
+
+// The tests of one node of the window (its last, `ahead` steps from now).
+std::string MlpMiqpSession::check_node(int ahead) {
+  const Scenario& scene = *window_.last.scene;
+  const Observation& o = window_.last;
+  if (!scene.limits.v.contains(o.ego.v) || !body_on_road(o.ego.y, scene)) {
+    char what[160];
+    std::snprintf(what, sizeof what,
+                  "the network leaves the speed or road bounds %d steps ahead (v %.2f m/s, "
+                  "y %.2f m)",
+                  ahead, o.ego.v, o.ego.y);
+    return what;
+  }
+  if (const std::string close = too_close_in_target_lane(o, scene); !close.empty()) {
+    return close + " " + std::to_string(ahead) + " steps ahead";
+  }
+  // The judge calls a move back towards the ego lane beyond its tolerance
+  // ill-posed; the take-over comes at half of it, while it can be stopped.
+  const LabelTolerances& tolerances = planner_.config().labels;
+  const double cap =
+      tolerances.reference == ReversalReference::TargetCenter ? scene.lane_width : INFINITY;
+  lateral_.assign(1, std::min(y_peak_, cap));
+  for (const EgoState& e : window_.ego) lateral_.push_back(e.y);
+  if (const double back = largest_lateral_reversal(lateral_, cap);
+      back > tolerances.reversal / 2.0) {
+    char what[120];
+    std::snprintf(what, sizeof what,
+                  "the network would move %.2f m back towards the ego lane %d steps ahead", back,
+                  ahead);
+    return what;
   }
   return "";
 }

@@ -2,10 +2,12 @@
 #include <cmath>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "lanechange/learn/model.hpp"
+#include "lanechange/traffic.hpp"
 #include "planner/miqp_planner.hpp"
 
 namespace lanechange::planner {
@@ -56,8 +58,27 @@ class MlpMiqpSession final : public PlannerSession {
   [[nodiscard]] Decision act(const Observation& observation) override;
 
  private:
+  /// The look-ahead's predicted path, kept from one step to the next: while
+  /// the real state stays within closed_loop.lookahead_tolerance of its
+  /// node 1, the next check only adds one node at its end.
+  struct Window {
+    int step = -1;                        ///< the observation step of node 0; -1: none
+    std::vector<EgoState> ego;            ///< nodes 0..n
+    TrafficPrediction cars;               ///< nodes 0..n
+    std::optional<Scenario> scene;        ///< the scene of the last full roll-out
+    std::optional<TrafficModel> traffic;  ///< the cars at node n
+    Observation last;                     ///< the observation at node n
+    EgoControl next;                      ///< the network's control at node n
+  };
+
   [[nodiscard]] EgoControl network_control(const Observation& observation) const;
-  [[nodiscard]] std::string check_ahead(const Observation& now, EgoControl first) const;
+  [[nodiscard]] std::string check_ahead(const Observation& now, EgoControl first);
+  [[nodiscard]] std::string roll_out(const Observation& now, EgoControl first);
+  [[nodiscard]] bool window_fits(const Observation& now) const;
+  [[nodiscard]] std::string extend_window();
+  /// Applies window_.next at node n and records node n + 1.
+  void advance_window(double dt);
+  [[nodiscard]] std::string check_node(int ahead);
   [[nodiscard]] Decision expert_decision(const Observation& observation, const std::string& why);
   [[nodiscard]] Decision refused(const Observation& observation);
 
@@ -69,6 +90,9 @@ class MlpMiqpSession final : public PlannerSession {
   /// The highest y of the ego so far (capped as the judge caps it), so the
   /// look-ahead sees a move back towards the ego lane that has begun.
   double y_peak_ = -INFINITY;
+  Window window_;
+  TrafficPrediction segment_;    ///< the window's last step, for the collision test
+  std::vector<double> lateral_;  ///< the window's y, for the reversal test
   bool expert_in_charge_ = false;
 };
 

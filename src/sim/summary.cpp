@@ -73,9 +73,6 @@ std::string number(double v) {
 std::string summary_row(const std::string& planner, const std::string& behavior,
                         const std::vector<const Row*>& rows) {
   const auto n = static_cast<double>(rows.size());
-  auto rate = [&](auto predicate) {
-    return static_cast<double>(std::count_if(rows.begin(), rows.end(), predicate)) / n;
-  };
   auto values = [&](double Row::*member) {
     std::vector<double> v;
     v.reserve(rows.size());
@@ -87,24 +84,24 @@ std::string summary_row(const std::string& planner, const std::string& behavior,
     for (const Row* r : rows) sum += r->*member;
     return sum / n;
   };
-  const std::vector<double> cells = {
-      n,
-      rate([](const Row* r) { return r->outcome == "well_posed" && !r->collision; }),
-      rate([](const Row* r) { return r->outcome == "ill_posed"; }),
-      rate([](const Row* r) { return r->outcome == "failure"; }),
-      rate([](const Row* r) { return r->outcome == "aborted"; }),
-      rate([](const Row* r) { return r->collision; }),
-      rate([](const Row* r) { return r->at_fault; }),
-      mean(&Row::takeovers),
-      mean(&Row::fallbacks),
-      mean(&Row::overruns),
-      nearest_rank(values(&Row::median_step_ms), 0.5),
-      nearest_rank(values(&Row::max_step_ms), 0.99),
-      nearest_rank(values(&Row::max_step_ms), 1.0),
-      nearest_rank(values(&Row::time_to_target_lane), 0.5),
-      nearest_rank(values(&Row::min_ttc), 0.05),
-      mean(&Row::rms_jerk),
-      nearest_rank(values(&Row::max_abs_accel), 0.95)};
+  const RolloutRates rates = rates_of(rows);
+  const std::vector<double> cells = {n,
+                                     rates.success,
+                                     rates.ill_posed,
+                                     rates.failure,
+                                     rates.aborted,
+                                     rates.collision,
+                                     rates.at_fault,
+                                     rates.takeovers,
+                                     rates.fallbacks,
+                                     rates.overruns,
+                                     nearest_rank(values(&Row::median_step_ms), 0.5),
+                                     nearest_rank(values(&Row::max_step_ms), 0.99),
+                                     nearest_rank(values(&Row::max_step_ms), 1.0),
+                                     nearest_rank(values(&Row::time_to_target_lane), 0.5),
+                                     nearest_rank(values(&Row::min_ttc), 0.05),
+                                     mean(&Row::rms_jerk),
+                                     nearest_rank(values(&Row::max_abs_accel), 0.95)};
   std::string line = planner + "," + behavior;
   for (double c : cells) {
     line += ',';
@@ -114,6 +111,29 @@ std::string summary_row(const std::string& planner, const std::string& behavior,
 }
 
 }  // namespace
+
+RolloutRates rates_of(std::span<const RolloutRow* const> rows) {
+  RolloutRates out;
+  out.rollouts = static_cast<long long>(rows.size());
+  if (rows.empty()) return out;
+  for (const RolloutRow* r : rows) {
+    out.success += r->success() ? 1 : 0;
+    out.ill_posed += r->outcome == "ill_posed" ? 1 : 0;
+    out.failure += r->outcome == "failure" ? 1 : 0;
+    out.aborted += r->outcome == "aborted" ? 1 : 0;
+    out.collision += r->collision ? 1 : 0;
+    out.at_fault += r->at_fault ? 1 : 0;
+    out.takeovers += r->takeovers;
+    out.fallbacks += r->fallbacks;
+    out.overruns += r->overruns;
+  }
+  const auto n = static_cast<double>(rows.size());
+  for (double* share : {&out.success, &out.ill_posed, &out.failure, &out.aborted, &out.collision,
+                        &out.at_fault, &out.takeovers, &out.fallbacks, &out.overruns}) {
+    *share /= n;
+  }
+  return out;
+}
 
 double nearest_rank(std::vector<double> values, double q) {
   std::erase_if(values, [](double v) { return !std::isfinite(v); });

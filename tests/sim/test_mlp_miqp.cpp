@@ -154,6 +154,51 @@ TEST(MlpMiqp, ANetworkSwingingBackTowardsTheEgoLaneIsTakenOver) {
   EXPECT_FALSE(r.trajectory.collision);
 }
 
+// The look-ahead kept from step to step (closed_loop.lookahead_tolerance)
+// asks the network about twice per step instead of once per look-ahead
+// node, and reaches the verdicts of a look-ahead rolled out every step.
+TEST(MlpMiqp, AKeptLookAheadDecidesAsARolledOutOne) {
+  const Config reusing = testing::untimed_config();
+  ASSERT_GT(reusing.closed_loop.lookahead_tolerance, 0.0);
+  Config rolling = reusing;
+  rolling.closed_loop.lookahead_tolerance = 0.0;
+  const planner::LaneKeeper keeper(reusing);
+  const double w = testing::open_road_scenario().lane_width;
+  struct Case {
+    Scenario scene;
+    MlpMiqpPlanner::Network network;
+  };
+  const std::vector<Case> cases = {
+      {testing::open_road_scenario(),
+       [&keeper, w](const Observation& o) { return keeper.control(o.ego, w, std::nullopt); }},
+      {testing::no_gap_scenario(), swerve_left},
+      {testing::open_road_scenario(Behavior::Idm), swerve_left}};
+  for (const Case& c : cases) {
+    long long calls[2] = {0, 0};
+    sim::Rollout runs[2];
+    for (int i = 0; i < 2; ++i) {
+      const Config& config = i == 0 ? reusing : rolling;
+      const MlpMiqpPlanner p = forced(
+          [&c, &calls, i](const Observation& o) {
+            ++calls[i];
+            return c.network(o);
+          },
+          kWorthTrying, config);
+      runs[i] = sim::simulate(c.scene, p, config);
+    }
+    EXPECT_EQ(runs[0].outcome, runs[1].outcome) << runs[0].reason << " / " << runs[1].reason;
+    EXPECT_EQ(runs[0].metrics.takeovers, runs[1].metrics.takeovers);
+    EXPECT_EQ(runs[0].trajectory.collision, runs[1].trajectory.collision);
+    ASSERT_EQ(runs[0].steps.size(), runs[1].steps.size());
+    for (std::size_t k = 0; k < runs[0].steps.size(); ++k) {
+      EXPECT_EQ(runs[0].steps[k].status, runs[1].steps[k].status) << "step " << k;
+    }
+    if (runs[0].metrics.takeovers == 0) {
+      EXPECT_LT(3 * calls[0], calls[1]);
+    }
+  }
+}
+
 // The real thing: a model trained by the CLI on a small data set drives the
 // loop without collision. (A 60-scene network need not finish the change;
 // docs/closed_loop.md has the paper-scale model's results.)

@@ -8,6 +8,7 @@
 #include <memory>
 #include <optional>
 #include <ostream>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -67,6 +68,17 @@ struct RolloutRow {
   std::string target_lane_slot;  ///< RolloutMetrics::target_lane_slot
   [[nodiscard]] bool success() const { return outcome == "well_posed" && !collision; }
 };
+
+/// The shares of outcomes over some rollouts, as summary.csv gives them per
+/// planner and behavior; every table of rates uses this one definition.
+struct RolloutRates {
+  long long rollouts = 0;
+  double success = 0, ill_posed = 0, failure = 0, aborted = 0;  ///< shares (success: no collision)
+  double collision = 0, at_fault = 0;                           ///< shares
+  double takeovers = 0, fallbacks = 0, overruns = 0;            ///< per rollout
+};
+/// All zero for no rows.
+[[nodiscard]] RolloutRates rates_of(std::span<const RolloutRow* const> rows);
 
 /// Reads a rollouts.csv (or one of its shards). InputError naming the file
 /// for a missing file, a header that is not ours, or a malformed row.
