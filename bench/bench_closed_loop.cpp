@@ -4,23 +4,48 @@
 // rollout); closed_loop_steps.hpp has the counters and the environment.
 #include <benchmark/benchmark.h>
 
+#include <cstdlib>
+#include <string>
+
 #include "closed_loop_steps.hpp"
 #include "lanechange/planner/planner.hpp"
 
 namespace {
 
-void run_planner(benchmark::State& state, const char* name) {
+void run_planner(
+    benchmark::State& state, const char* name, const std::string& model = "",
+    double lookahead_tolerance = lanechange::Config{}.closed_loop.lookahead_tolerance) {
   lanechange::Config config;
   config.closed_loop.step_budget_ms = 1e6;  // time every step, overrule none
-  lanechange::bench::run_closed_loop_steps(state, *lanechange::planner::make_planner(name, config),
-                                           config);
+  config.closed_loop.lookahead_tolerance = lookahead_tolerance;
+  lanechange::bench::run_closed_loop_steps(
+      state, *lanechange::planner::make_planner(name, config, model), config);
 }
 
 void BM_MiqpClosedLoopStep(benchmark::State& state) { run_planner(state, "miqp"); }
 void BM_KeepLaneStep(benchmark::State& state) { run_planner(state, "keep-lane"); }
 
+// mlp-miqp needs a trained model (lanechange train): LANECHANGE_BENCH_MODEL
+// names its directory. The step target (2 us median) counts the network's
+// steps, planned_step_ms_median; the second run rolls the look-ahead out
+// every step, for the ratio in the same run.
+void run_mlp_miqp(benchmark::State& state, double lookahead_tolerance) {
+  const char* model = std::getenv("LANECHANGE_BENCH_MODEL");
+  if (model == nullptr) {
+    state.SkipWithError("set LANECHANGE_BENCH_MODEL to a model directory (lanechange train)");
+    return;
+  }
+  run_planner(state, "mlp-miqp", model, lookahead_tolerance);
+}
+void BM_MlpMiqpStep(benchmark::State& state) {
+  run_mlp_miqp(state, lanechange::Config{}.closed_loop.lookahead_tolerance);
+}
+void BM_MlpMiqpStepRolledOutEveryStep(benchmark::State& state) { run_mlp_miqp(state, 0.0); }
+
 BENCHMARK(BM_MiqpClosedLoopStep)->Unit(benchmark::kMillisecond)->Iterations(1);
 BENCHMARK(BM_KeepLaneStep)->Unit(benchmark::kMillisecond)->Iterations(1);
+BENCHMARK(BM_MlpMiqpStep)->Unit(benchmark::kMillisecond)->Iterations(1);
+BENCHMARK(BM_MlpMiqpStepRolledOutEveryStep)->Unit(benchmark::kMillisecond)->Iterations(1);
 
 }  // namespace
 
