@@ -103,13 +103,17 @@ TEST(Dagger, ScenesTheClassifierRefusesAreNotRolledOut) {
   EXPECT_FALSE(dagger::detail::collect_scene(scene, trying, config, {4, 1, 60.0}).empty());
 }
 
+// The suite's base data set is made once per CTest run (SHARED_SUITES in
+// CMakeLists.txt) and only read: each test runs in its own process.
 class DaggerCli : public ::testing::Test {
  protected:
   void SetUp() override {
-    testing::write_text(config_, nlohmann::json(small_config()).dump());
-    const auto made = testing::run_cli("--config " + config_ +
-                                       " generate --count 40 --seed 3 --jobs 2 --out " + data_);
-    ASSERT_EQ(made.exit_code, 0) << made.output;
+    testing::made_once(shared_, [this](const std::filesystem::path&) {
+      testing::write_text(config_, nlohmann::json(small_config()).dump());
+      const auto made = testing::run_cli("--config " + config_ +
+                                         " generate --count 40 --seed 3 --jobs 2 --out " + data_);
+      ASSERT_EQ(made.exit_code, 0) << made.output;
+    });
   }
   [[nodiscard]] testing::CommandResult train(const std::string& extra) const {
     return testing::run_cli("--config " + config_ +
@@ -117,8 +121,9 @@ class DaggerCli : public ::testing::Test {
                             " --out " + dir_.file("model") + " " + extra);
   }
   testing::TempDir dir_;
-  std::string config_ = dir_.file("config.json");
-  std::string data_ = dir_.file("data");
+  std::filesystem::path shared_ = std::filesystem::path(LANECHANGE_TEST_SHARED_DIR) / "base";
+  std::string config_ = (shared_ / "config.json").string();
+  std::string data_ = (shared_ / "data").string();
 };
 
 // The retrain stops early on exactly the base's validation rows, so every

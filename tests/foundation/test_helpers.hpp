@@ -1,5 +1,8 @@
 #pragma once
+#include <fcntl.h>
 #include <gtest/gtest.h>
+#include <sys/file.h>
+#include <unistd.h>
 
 #include <cstdio>
 #include <cstdlib>
@@ -44,6 +47,30 @@ class TempDir {
  private:
   std::filesystem::path path_;
 };
+
+/// dir, made once by make(dir) and then reused: test processes that need the
+/// same costly inputs (a generated data set, a trained model) wait on a lock
+/// while the first makes them. CTest empties the parent before the run
+/// (lanechange_add_test's SHARED_SUITES), so a run never reuses an older build's.
+template <class Make>
+std::filesystem::path made_once(const std::filesystem::path& dir, Make&& make) {
+  std::filesystem::create_directories(dir.parent_path());
+  const std::string lock_path = dir.string() + ".lock";
+  const int lock = ::open(lock_path.c_str(), O_CREAT | O_RDWR, 0644);
+  if (lock < 0 || ::flock(lock, LOCK_EX) != 0) {
+    ADD_FAILURE() << "cannot lock " << lock_path;
+    return dir;
+  }
+  const auto done = dir / ".made";
+  if (!std::filesystem::exists(done)) {
+    std::filesystem::remove_all(dir);
+    std::filesystem::create_directories(dir);
+    make(dir);
+    if (!::testing::Test::HasFatalFailure()) std::ofstream(done) << "made\n";
+  }
+  ::close(lock);  // also releases the lock
+  return dir;
+}
 
 inline void write_text(const std::string& path, const std::string& text) {
   std::ofstream(path) << text;

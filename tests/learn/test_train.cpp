@@ -30,18 +30,21 @@ std::map<std::string, std::string> snapshot(const fs::path& dir) {
   return out;
 }
 
+// Every test of this suite reads one data set and one model, made once per
+// CTest run (tests/CMakeLists.txt, SHARED_SUITES): each test runs in its own
+// process, and making them took 40 s a test under the sanitizers.
 class Trained : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    root_ = fs::temp_directory_path() / ("lanechange_learn_" + std::to_string(::getpid()));
-    fs::remove_all(root_);
-    fs::create_directories(root_);
-    const auto gen = testing::run_cli(testing::small_run(data_dir(), 120, 5, "--jobs 2"));
-    ASSERT_EQ(gen.exit_code, 0) << gen.output;
-    TrainOptions o = options(model_dir());
-    report_ = train_models(o);
+    root_ = fs::path(LANECHANGE_TEST_SHARED_DIR) / "trained";
+    testing::made_once(root_, [](const fs::path&) {
+      const auto gen = testing::run_cli(testing::small_run(data_dir(), 120, 5, "--jobs 2"));
+      ASSERT_EQ(gen.exit_code, 0) << gen.output;
+      const TrainReport report = train_models(options(model_dir()));
+      testing::write_text(report_metrics_file(), report.metrics.dump());
+    });
+    report_metrics_ = json::parse(testing::read_text(report_metrics_file()));
   }
-  static void TearDownTestSuite() { fs::remove_all(root_); }
 
   static TrainOptions options(const std::string& out) {
     TrainOptions o;
@@ -56,18 +59,20 @@ class Trained : public ::testing::Test {
   }
   static std::string data_dir() { return (root_ / "data").string(); }
   static std::string model_dir() { return (root_ / "model").string(); }
+  // The metrics train_models returned, beside the metrics.json it wrote.
+  static std::string report_metrics_file() { return (root_ / "returned_metrics.json").string(); }
   static std::string train_args(const std::string& out) {
     return "train --data " + data_dir() + " --out " + out +
            " --seed 4 --jobs 2 --quick --max-epochs " + std::to_string(kMaxEpochs);
   }
 
   static inline fs::path root_;
-  static inline TrainReport report_;
+  static inline json report_metrics_;
 };
 
 TEST_F(Trained, MetricsHoldEveryClassifierAndTheNetwork) {
   const json m = json::parse(testing::read_text(model_dir() + "/metrics.json"));
-  EXPECT_EQ(m, json::parse(report_.metrics.dump()));
+  EXPECT_EQ(m, report_metrics_);
   for (const char* set : {"classifiers", "classifiers_with_behavior"}) {
     for (ClassifierKind kind : kClassifierKinds) {
       const json& c = m.at(set).at(std::string(classifier_name(kind)));
@@ -99,7 +104,7 @@ TEST_F(Trained, ReloadedModelGivesTheSamePredictions) {
       rows.push_back(r);
     }
   }
-  const json m = report_.metrics;
+  const json m = report_metrics_;
   for (FeatureSet set : {FeatureSet::Plain, FeatureSet::WithBehavior}) {
     const Eigen::MatrixXd raw =
         classifier_inputs(data.scenarios, rows, set == FeatureSet::WithBehavior);
@@ -218,10 +223,10 @@ TEST_F(Trained, CliTrainsRepeatablyWithPicturesAndBadInputLeavesTheModelAlone) {
   for (ClassifierKind kind : kClassifierKinds) {
     const std::string name(classifier_name(kind));
     EXPECT_EQ(m["classifiers"][name]["test_accuracy"],
-              report_.metrics["classifiers"][name]["test_accuracy"])
+              report_metrics_["classifiers"][name]["test_accuracy"])
         << name;
   }
-  EXPECT_EQ(m["network"]["test_rmse"], report_.metrics["network"]["test_rmse"]);
+  EXPECT_EQ(m["network"]["test_rmse"], report_metrics_["network"]["test_rmse"]);
   for (const char* png :
        {"loss.png", "confusion_plain_svm.png", "confusion_with_behavior_knn.png"}) {
     EXPECT_TRUE(fs::exists(fs::path(out) / png)) << png;

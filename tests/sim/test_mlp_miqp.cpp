@@ -71,10 +71,14 @@ TEST(MlpMiqp, AWrongRefusalIsCaughtByTheExpertsCheck) {
 
   // Where the expert finds no plan either, the fallback keeps the lane and
   // the expert checks again every period, no more often.
-  const sim::Rollout blocked = sim::simulate(testing::no_gap_scenario(), p, config);
+  Config sparse = config;
+  sparse.closed_loop.refusal_check_period = 3;
+  const MlpMiqpPlanner checks_every_third = refusing_counter(calls, sparse);
+  const sim::Rollout blocked =
+      sim::simulate(testing::no_gap_scenario(), checks_every_third, sparse);
   EXPECT_EQ(blocked.outcome, Outcome::Aborted) << blocked.reason;
   EXPECT_FALSE(blocked.trajectory.collision);
-  const std::size_t period = static_cast<std::size_t>(config.closed_loop.refusal_check_period);
+  const std::size_t period = static_cast<std::size_t>(sparse.closed_loop.refusal_check_period);
   int checks = 0;
   for (std::size_t k = 0; k < blocked.steps.size(); ++k) {
     const bool checked =
