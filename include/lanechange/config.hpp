@@ -198,9 +198,9 @@ struct ClosedLoopSettings {
   double lookahead_tolerance = 0.02;
   /// Steps between the expert's checks of a scene the hierarchical planner's
   /// classifier refused, from the first step on; the first plan it finds
-  /// takes over. 1, as `miqp` re-plans: a gap opens for a step or two, and a
-  /// check of an infeasible scene mostly takes well under a millisecond. 0 is the paper's Algorithm
-  /// 1: a refused scene is left to the fallback for good (docs/closed_loop.md).
+  /// takes over. 1, as `miqp` re-plans: a gap may open between two sparser
+  /// checks; the price is an expert plan (2.7 ms median) per refused step. 0 is the paper's
+  /// Algorithm 1: a refused scene is left to the fallback for good (docs/closed_loop.md).
   int refusal_check_period = 1;
 };
 
