@@ -57,7 +57,12 @@ std::filesystem::path made_once(const std::filesystem::path& dir, Make&& make) {
   std::filesystem::create_directories(dir.parent_path());
   const std::string lock_path = dir.string() + ".lock";
   const int lock = ::open(lock_path.c_str(), O_CREAT | O_RDWR, 0644);
-  if (lock < 0 || ::flock(lock, LOCK_EX) != 0) {
+  if (lock < 0) {
+    ADD_FAILURE() << "cannot open " << lock_path;
+    return dir;
+  }
+  if (::flock(lock, LOCK_EX) != 0) {
+    ::close(lock);
     ADD_FAILURE() << "cannot lock " << lock_path;
     return dir;
   }
