@@ -334,28 +334,61 @@ double prune_above(double incumbent, const MiqpSettings& settings) {
   return incumbent - std::max(settings.absolute_gap, settings.relative_gap * std::abs(incumbent));
 }
 
-// Moves each lane switch of a complete mode sequence one node earlier or
-// later while that lowers the objective: a cheap way to an incumbent close to
-// the optimum, which lets the search prune most of its tree.
-template <class Accept>
+// Moves the lane switch between nodes j - 1 and j by `step` nodes (later
+// when positive, earlier when negative) within the two segments it joins;
+// false when the move would cross another switch or reach node 0.
+bool move_switch(const std::vector<int>& modes, int j, int step, std::vector<int>& out) {
+  const int before = modes[j - 1];
+  const int after = modes[j];
+  const int first = step > 0 ? j : j + step;
+  const int last = step > 0 ? j + step - 1 : j - 1;
+  if (first < 1 || last >= static_cast<int>(modes.size())) return false;
+  out = modes;
+  for (int i = first; i <= last; ++i) {
+    if (modes[i] != (step > 0 ? after : before)) return false;
+    out[i] = step > 0 ? before : after;
+  }
+  return true;
+}
+
+// Moves each lane switch of a complete mode sequence earlier or later while
+// that lowers the objective: a cheap way to an incumbent close to the
+// optimum, which lets the search prune most of its tree. A switch that moved
+// keeps moving the same way with doubling steps (the warm start's switch
+// times can be a second or more off), and the search stops as soon as
+// `settled()` says no sequence can beat the incumbent by more than the gap.
+template <class Accept, class Settled>
 void improve_switches(const LaneChangeQp& qp, std::vector<int> modes, double objective,
-                      FastWorkspace& ws, long& nodes, Accept&& accept) {
+                      FastWorkspace& ws, long& nodes, Accept&& accept, Settled&& settled) {
   std::vector<int> trial;
-  for (bool improved = true; improved;) {
+  auto try_move = [&](int j, int step) {
+    if (!move_switch(modes, j, step, trial)) return false;
+    NodeOutcome o = solve_node(qp, trial, ws, objective);  // only a better one counts
+    ++nodes;
+    if (!o.feasible || o.objective >= objective - 1e-12) return false;
+    objective = o.objective;
+    modes = trial;
+    accept(o);
+    return true;
+  };
+  for (bool improved = true; improved && !settled();) {
     improved = false;
-    for (int j = 2; j <= qp.steps && !improved; ++j) {
+    for (int j = 2; j <= qp.steps && !improved && !settled(); ++j) {
       if (modes[j] == modes[j - 1]) continue;
-      for (int move = 0; move < 2 && !improved; ++move) {
-        trial = modes;
-        if (move == 0) trial[j] = modes[j - 1];                // switch one node later
-        if (move == 1) trial[j - 1] = modes[j];                // switch one node earlier
-        NodeOutcome o = solve_node(qp, trial, ws, objective);  // only a better one counts
-        ++nodes;
-        if (o.feasible && o.objective < objective - 1e-12) {
-          objective = o.objective;
-          modes = trial;
-          accept(o);
-          improved = true;
+      for (const int direction : {1, -1}) {
+        if (improved || settled() || !try_move(j, direction)) continue;
+        improved = true;
+        // The switch now sits at j + direction; keep going that way.
+        int at = j + direction;
+        for (int step = 2; !settled();) {
+          if (try_move(at, direction * step)) {
+            at += direction * step;
+            step *= 2;
+          } else if (step > 1) {
+            step = 1;
+          } else {
+            break;
+          }
         }
       }
     }
@@ -411,23 +444,30 @@ LaneChangeSolution FastLaneChangeSolver::solve(const LaneChangeQp& qp, const Miq
   NodeOutcome root = solve_node(qp, root_modes, *ws);
   ++out.nodes;
   if (root.feasible) {
-    for (int attempt = 0; attempt < 2; ++attempt) {
-      std::vector<int> start;
-      if (attempt == 0 && hints.modes != nullptr &&
-          static_cast<int>(hints.modes->size()) == n + 1) {
-        start = *hints.modes;
-      } else if (attempt == 1) {
-        start = rounded_modes(qp, root.path);
-        if (hints.modes != nullptr && start == *hints.modes) continue;
-      } else {
-        continue;
-      }
-      NodeOutcome o = solve_node(qp, start, *ws);
+    // Nothing beats the root relaxation: once an incumbent is within the gap
+    // of it, the search is over (in later rounds the hint is usually there).
+    const double root_bound = root.objective;
+    auto settled = [&] { return root_bound >= prune_above(incumbent, settings); };
+    std::vector<std::pair<double, std::vector<int>>> starts;
+    std::vector<int> rounded = rounded_modes(qp, root.path);
+    if (hints.modes != nullptr && static_cast<int>(hints.modes->size()) == n + 1) {
+      starts.emplace_back(kInfinity, *hints.modes);
+    }
+    if (starts.empty() || rounded != starts.front().second) starts.emplace_back(kInfinity, rounded);
+    for (auto& [objective, modes] : starts) {
+      if (settled()) break;
+      NodeOutcome o = solve_node(qp, modes, *ws);
       ++out.nodes;
       if (!o.feasible) continue;
-      const double objective = o.objective;
+      objective = o.objective;
       accept(o);
-      improve_switches(qp, start, objective, *ws, out.nodes, accept);
+    }
+    // The better start first: its switches are likely nearer the optimum.
+    std::sort(starts.begin(), starts.end(),
+              [](const auto& a, const auto& b) { return a.first < b.first; });
+    for (const auto& [objective, modes] : starts) {
+      if (!std::isfinite(objective) || settled()) continue;
+      improve_switches(qp, modes, objective, *ws, out.nodes, accept, settled);
     }
   }
   out.incumbent_qps = out.nodes;
