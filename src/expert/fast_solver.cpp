@@ -7,6 +7,8 @@
 // previous round's) as an incumbent, so most of the tree is pruned at once.
 // Nothing here assumes a monotone lane sequence: the search is exact for any.
 #include <algorithm>
+#include <array>
+#include <bit>
 #include <chrono>
 #include <cmath>
 #include <cstdint>
@@ -124,12 +126,19 @@ double limit_along(const LaneMode& mode, const Eigen::Vector4d& g) {
 // union lies below the line through their corners, a ramp in y: an
 // inequality that every mode implies, which tightens the relaxation a lot
 // (the ego cannot be far ahead of its leader while still low in its lane).
-bool ramp_row(const LaneChangeQp& qp, int k, HalfSpace& out) {
-  const auto& modes = qp.node_modes[k];
+bool ramp_row(const LaneChangeQp& qp, const FastWorkspace& ws, int k, HalfSpace& out) {
+  const auto& all_modes = qp.node_modes[k];
+  // The modes the node can reach, in order of y (lane_modes lists them so).
+  std::array<const LaneMode*, 3> modes{};
+  std::size_t count = 0;
+  for (std::size_t m = 0; m < all_modes.size() && count < modes.size(); ++m) {
+    if (ws.possible(k, static_cast<int>(m))) modes[count++] = &all_modes[m];
+  }
+  if (count < 2) return false;
   const double ylo = qp.state_lower[k][kY];
   const double yhi = qp.state_upper[k][kY];
-  const LaneMode& low = modes.front();
-  const LaneMode& high = modes.back();
+  const LaneMode& low = *modes[0];
+  const LaneMode& high = *modes[count - 1];
   const auto [low_lo, low_hi] = lateral_range(low, ylo, yhi);
   const auto [high_lo, high_hi] = lateral_range(high, ylo, yhi);
   // The corners exist only where both modes reach into the node's y bounds; a
@@ -144,8 +153,8 @@ bool ramp_row(const LaneChangeQp& qp, int k, HalfSpace& out) {
     // Every middle mode must allow no more than the larger of the two.
     const double u_max = std::max(u_low, u_high);
     bool middle_ok = true;
-    for (std::size_t m = 1; m + 1 < modes.size(); ++m) {
-      middle_ok = middle_ok && limit_along(modes[m], h.g) <= u_max;
+    for (std::size_t m = 1; m + 1 < count; ++m) {
+      middle_ok = middle_ok && limit_along(*modes[m], h.g) <= u_max;
     }
     if (!middle_ok) continue;
     double slope = 0.0;  // of the limit in y
@@ -160,6 +169,15 @@ bool ramp_row(const LaneChangeQp& qp, int k, HalfSpace& out) {
     return true;
   }
   return false;
+}
+
+// The smallest value of g'z over the box [lo, hi].
+double least_over_box(const Eigen::Vector4d& g, const State& lo, const State& hi) {
+  double least = 0.0;
+  for (int i = 0; i < 4; ++i) {
+    if (g[i] != 0.0) least += g[i] * (g[i] > 0.0 ? lo[i] : hi[i]);  // 0 * inf is no bound
+  }
+  return least;
 }
 
 // The base with the bounds of the state components in `bounds` (bit i for
@@ -177,12 +195,23 @@ void build_node(const LaneChangeQp& qp, const std::vector<int>& modes, unsigned 
       }
     }
     if (k == 0 || qp.node_modes[k].empty()) continue;  // the initial state is fixed: checked apart
-    if (modes[k] == kFree) {
-      HalfSpace ramp;
-      if (ramp_row(qp, k, ramp)) add_row(st, ramp.g, ramp.upper, true);
+    if (modes[k] != kFree) {
+      for (const HalfSpace& h : qp.node_modes[k][modes[k]].rows) add_row(st, h.g, h.upper, true);
       continue;
     }
-    for (const HalfSpace& h : qp.node_modes[k][modes[k]].rows) add_row(st, h.g, h.upper, true);
+    const unsigned possible = ws.possible_modes[k];
+    if (std::popcount(possible) == 1) {
+      // A node with one reachable mode is in it: its rows are no choice, and
+      // those that every reachable state meets need not be written.
+      for (const HalfSpace& h : qp.node_modes[k][std::countr_zero(possible)].rows) {
+        if (-least_over_box(-h.g, ws.reach_lower[k], ws.reach_upper[k]) > h.upper) {
+          add_row(st, h.g, h.upper, true);
+        }
+      }
+      continue;
+    }
+    HalfSpace ramp;
+    if (ramp_row(qp, ws, k, ramp)) add_row(st, ramp.g, ramp.upper, true);
   }
 }
 
@@ -281,7 +310,72 @@ bool initial_state_allowed(const LaneChangeQp& qp) {
   return holds;
 }
 
-void prepare_round(const LaneChangeQp& qp, const SolveHints& hints, FastWorkspace& ws) {
+namespace {
+
+// Bit m for each lane mode of node k that some state of the box [lo, hi]
+// could satisfy; a mode with a row that the whole box breaks cannot hold.
+unsigned modes_meeting_box(const LaneChangeQp& qp, int k, const State& lo, const State& hi) {
+  unsigned possible = 0;
+  const auto& modes = qp.node_modes[k];
+  for (std::size_t m = 0; m < modes.size(); ++m) {
+    bool holds = true;
+    for (const HalfSpace& h : modes[m].rows) {
+      const double margin = 1e-6 * (1.0 + std::abs(h.upper));  // rounding: keep a doubtful mode
+      holds = holds && least_over_box(h.g, lo, hi) <= h.upper + margin;
+    }
+    if (holds) possible |= 1U << m;
+  }
+  return possible;
+}
+
+// Which modes each node can reach. Boxes of the states are carried through
+// the round's (linear) dynamics from the fixed initial state with every
+// control in its box, and cut to the state bounds at each node: every
+// feasible point of the round lies in them, so a mode that no state of its
+// node's box satisfies is no choice there. This is bound tightening, not a
+// heuristic: the search stays exact. A node with one mode left is fixed from
+// the root on, and the ramp of a node is drawn between its reachable modes.
+void find_possible_modes(const LaneChangeQp& qp, FastWorkspace& ws) {
+  const int n = qp.steps;
+  ws.reach_lower.assign(n + 1, State::Constant(-kInfinity));
+  ws.reach_upper.assign(n + 1, State::Constant(kInfinity));
+  State lo = qp.initial_state;
+  State hi = qp.initial_state;
+  for (int k = 0; k < n; ++k) {
+    const StageDynamics& d = qp.dynamics[k];
+    State next_lo = d.c;
+    State next_hi = d.c;
+    for (int i = 0; i < 4; ++i) {
+      for (int j = 0; j < 4; ++j) {
+        const double a = d.A(i, j);
+        next_lo[i] += a * (a > 0.0 ? lo[j] : hi[j]);
+        next_hi[i] += a * (a > 0.0 ? hi[j] : lo[j]);
+      }
+      for (int j = 0; j < 2; ++j) {
+        const double b = d.B(i, j);
+        next_lo[i] += b * (b > 0.0 ? qp.control_lower[j] : qp.control_upper[j]);
+        next_hi[i] += b * (b > 0.0 ? qp.control_upper[j] : qp.control_lower[j]);
+      }
+    }
+    lo = next_lo.cwiseMax(qp.state_lower[k + 1]);
+    hi = next_hi.cwiseMin(qp.state_upper[k + 1]);
+    if (k + 1 == n && qp.terminal_lateral_fixed) {
+      lo[kY] = std::max(lo[kY], qp.lateral_reference);
+      hi[kY] = std::min(hi[kY], qp.lateral_reference);
+    }
+    // An empty box means the round has no feasible point; let the QPs show it.
+    if ((lo.array() > hi.array()).any()) return;
+    ws.reach_lower[k + 1] = lo;
+    ws.reach_upper[k + 1] = hi;
+    if (!qp.node_modes[k + 1].empty())
+      ws.possible_modes[k + 1] = modes_meeting_box(qp, k + 1, lo, hi);
+  }
+}
+
+}  // namespace
+
+void prepare_round(const LaneChangeQp& qp, const SolveHints& hints, FastWorkspace& ws,
+                   bool reachable_modes) {
   const int n = qp.steps;
   ws.iterations = 0;
   build_base(qp, ws.base);
@@ -296,20 +390,24 @@ void prepare_round(const LaneChangeQp& qp, const SolveHints& hints, FastWorkspac
   for (Control& u : ws.start_controls) {
     u = u.cwiseMax(qp.control_lower + margin).cwiseMin(qp.control_upper - margin);
   }
+  ws.possible_modes.assign(n + 1, ~0U);
+  if (reachable_modes) find_possible_modes(qp, ws);
 }
 
 namespace {
 
 // The free node whose relaxed state violates all its modes the most, or -1.
-int branching_node(const LaneChangeQp& qp, const std::vector<int>& modes, const Iterate& path,
-                   double threshold) {
+int branching_node(const LaneChangeQp& qp, const FastWorkspace& ws, const std::vector<int>& modes,
+                   const Iterate& path, double threshold) {
   int chosen = -1;
   double most = threshold;
   for (int k = 1; k <= qp.steps; ++k) {
     if (modes[k] != kFree || qp.node_modes[k].empty()) continue;
     double least = kInfinity;
-    for (const LaneMode& m : qp.node_modes[k])
-      least = std::min(least, mode_violation(m, path.states[k]));
+    for (int m = 0; m < static_cast<int>(qp.node_modes[k].size()); ++m) {
+      if (ws.possible(k, m))
+        least = std::min(least, mode_violation(qp.node_modes[k][m], path.states[k]));
+    }
     if (least > most) {
       most = least;
       chosen = k;
@@ -351,6 +449,15 @@ bool move_switch(const std::vector<int>& modes, int j, int step, std::vector<int
   return true;
 }
 
+// False when some node of `modes` is fixed to a mode it cannot reach: such a
+// QP is infeasible, and need not be solved to tell.
+bool reachable(const FastWorkspace& ws, const std::vector<int>& modes) {
+  for (std::size_t k = 1; k < modes.size(); ++k) {
+    if (modes[k] != kFree && !ws.possible(static_cast<int>(k), modes[k])) return false;
+  }
+  return true;
+}
+
 // Moves each lane switch of a complete mode sequence earlier or later while
 // that lowers the objective: a cheap way to an incumbent close to the
 // optimum, which lets the search prune most of its tree. A switch that moved
@@ -362,7 +469,7 @@ void improve_switches(const LaneChangeQp& qp, std::vector<int> modes, double obj
                       FastWorkspace& ws, long& nodes, Accept&& accept, Settled&& settled) {
   std::vector<int> trial;
   auto try_move = [&](int j, int step) {
-    if (!move_switch(modes, j, step, trial)) return false;
+    if (!move_switch(modes, j, step, trial) || !reachable(ws, trial)) return false;
     NodeOutcome o = solve_node(qp, trial, ws, objective);  // only a better one counts
     ++nodes;
     if (!o.feasible || o.objective >= objective - 1e-12) return false;
@@ -395,11 +502,19 @@ void improve_switches(const LaneChangeQp& qp, std::vector<int> modes, double obj
   }
 }
 
-// A complete mode sequence from a path: at each node, the mode it comes closest to.
-std::vector<int> rounded_modes(const LaneChangeQp& qp, const Iterate& path) {
+// A complete mode sequence from a path: at each node, the reachable mode it comes closest to.
+std::vector<int> rounded_modes(const LaneChangeQp& qp, const FastWorkspace& ws,
+                               const Iterate& path) {
   std::vector<int> modes(qp.steps + 1, kFree);
   for (int k = 1; k <= qp.steps; ++k) {
-    if (!qp.node_modes[k].empty()) modes[k] = qp.best_mode(path, k);
+    double least = kInfinity;
+    for (int m = 0; m < static_cast<int>(qp.node_modes[k].size()); ++m) {
+      const double violation = mode_violation(qp.node_modes[k][m], path.states[k]);
+      if (ws.possible(k, m) && violation < least) {
+        least = violation;
+        modes[k] = m;
+      }
+    }
   }
   return modes;
 }
@@ -428,7 +543,7 @@ LaneChangeSolution FastLaneChangeSolver::solve(const LaneChangeQp& qp, const Miq
     out.message = "the initial state breaks the lane rules";
     return out;
   }
-  prepare_round(qp, hints, *ws);
+  prepare_round(qp, hints, *ws, options_.reachable_modes);
   double incumbent = kInfinity;
   auto accept = [&](NodeOutcome& o) {
     if (o.objective < incumbent) {
@@ -449,13 +564,14 @@ LaneChangeSolution FastLaneChangeSolver::solve(const LaneChangeQp& qp, const Miq
     const double root_bound = root.objective;
     auto settled = [&] { return root_bound >= prune_above(incumbent, settings); };
     std::vector<std::pair<double, std::vector<int>>> starts;
-    std::vector<int> rounded = rounded_modes(qp, root.path);
+    std::vector<int> rounded = rounded_modes(qp, *ws, root.path);
     if (hints.modes != nullptr && static_cast<int>(hints.modes->size()) == n + 1) {
       starts.emplace_back(kInfinity, *hints.modes);
     }
     if (starts.empty() || rounded != starts.front().second) starts.emplace_back(kInfinity, rounded);
     for (auto& [objective, modes] : starts) {
       if (settled()) break;
+      if (!reachable(*ws, modes)) continue;
       NodeOutcome o = solve_node(qp, modes, *ws);
       ++out.nodes;
       if (!o.feasible) continue;
@@ -498,12 +614,12 @@ LaneChangeSolution FastLaneChangeSolver::solve(const LaneChangeQp& qp, const Miq
     numerical_trouble = numerical_trouble || o.numerical_failure;
     if (!o.feasible) continue;
     if (o.objective >= prune_above(incumbent, settings)) continue;
-    int k = branching_node(qp, modes, o.path, o.coarse ? kCoarseViolation : kModeTolerance);
+    int k = branching_node(qp, *ws, modes, o.path, o.coarse ? kCoarseViolation : kModeTolerance);
     if (k < 0 && o.coarse) {  // maybe a leaf: only a solution can tell
       o = solve_node(qp, modes, *ws, prune_above(incumbent, settings));
       numerical_trouble = numerical_trouble || o.numerical_failure;
       if (!o.feasible || o.objective >= prune_above(incumbent, settings)) continue;
-      k = branching_node(qp, modes, o.path, kModeTolerance);
+      k = branching_node(qp, *ws, modes, o.path, kModeTolerance);
     }
     if (k < 0) {
       accept(o);
@@ -515,7 +631,7 @@ LaneChangeSolution FastLaneChangeSolver::solve(const LaneChangeQp& qp, const Miq
     std::vector<std::pair<double, int>> order;
     order.reserve(options.size());
     for (int m = 0; m < static_cast<int>(options.size()); ++m) {
-      order.emplace_back(mode_violation(options[m], o.path.states[k]), m);
+      if (ws->possible(k, m)) order.emplace_back(mode_violation(options[m], o.path.states[k]), m);
     }
     std::sort(order.begin(), order.end(), std::greater<>());
     for (const auto& [violation, m] : order) {

@@ -20,6 +20,13 @@ struct FastWorkspace final : LaneChangeWorkspace {
   std::vector<Control> start_controls;
   long iterations = 0;         // of the interior-point method, for the solution's statistics
   unsigned needed_bounds = 0;  // state components whose bounds this round's QPs carry
+  // Per node, bit m set when lane mode m can hold there at all: the states
+  // the round's dynamics, bounds and controls can reach leave the others out.
+  std::vector<unsigned> possible_modes;
+  std::vector<State> reach_lower, reach_upper;  // per node, the box of reachable states
+  [[nodiscard]] bool possible(int node, int mode) const {
+    return ((possible_modes[static_cast<std::size_t>(node)] >> mode) & 1U) != 0;
+  }
 };
 
 struct NodeOutcome {
@@ -37,9 +44,11 @@ FastWorkspace& workspace_for(const SolveHints& hints, std::unique_ptr<LaneChange
 /// True when some mode of node 0 holds at the initial state (or none applies).
 [[nodiscard]] bool initial_state_allowed(const LaneChangeQp& qp);
 
-/// Readies `ws` for the QPs of one round: the base problem without lane rows
-/// and the starting controls (the hint's, strictly inside the bounds).
-void prepare_round(const LaneChangeQp& qp, const SolveHints& hints, FastWorkspace& ws);
+/// Readies `ws` for the QPs of one round: the base problem without lane rows,
+/// the starting controls (the hint's, strictly inside the bounds) and, with
+/// `reachable_modes`, the modes each node can reach (else every mode).
+void prepare_round(const LaneChangeQp& qp, const SolveHints& hints, FastWorkspace& ws,
+                   bool reachable_modes = true);
 
 /// The QP of `modes` (kFreeMode where a node is free); see fast_solver.cpp.
 /// A node whose optimum is proven to be at least `cutoff` comes back infeasible.

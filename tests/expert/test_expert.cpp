@@ -197,6 +197,34 @@ TEST(FastSolver, ReportsAnInitialStateThatBreaksTheRules) {
   EXPECT_EQ(FastLaneChangeSolver{}.solve(qp, {}).status, MiqpStatus::Infeasible);
 }
 
+// Dropping the modes no reachable state meets is bound tightening: on
+// sampled paper-size problems of both rules the optimum and the verdict must
+// not move, and the search must do less work over all of them.
+TEST(FastSolver, ReachableModesChangeNoAnswerAndSaveNodes) {
+  const FastLaneChangeSolver tightened;
+  const FastLaneChangeSolver plain(FastSolverOptions{.reachable_modes = false});
+  long nodes_tightened = 0;
+  long nodes_plain = 0;
+  for (const LaneRule rule : {LaneRule::Footprint, LaneRule::EitherOr}) {
+    Config config;
+    config.expert.lane_rule = rule;
+    const ScenarioSampler sampler(config, 29);
+    for (std::uint64_t i = 0; i < 12; ++i) {
+      const LaneChangeQp qp = first_round_problem(sampler.sample(i), config);
+      const LaneChangeSolution a = tightened.solve(qp, {});
+      const LaneChangeSolution b = plain.solve(qp, {});
+      ASSERT_EQ(a.status, b.status) << "scenario " << i;
+      if (a.status == MiqpStatus::Optimal) {
+        EXPECT_NEAR(a.objective, b.objective, 1e-6 * (1.0 + std::abs(b.objective)))
+            << "scenario " << i;
+      }
+      nodes_tightened += a.nodes;
+      nodes_plain += b.nodes;
+    }
+  }
+  EXPECT_LT(nodes_tightened, nodes_plain);
+}
+
 void expect_audit_passes(const Trajectory& t, const Scenario& s, const Config& c) {
   for (const std::string& problem : audit_trajectory(t, s, c)) ADD_FAILURE() << problem;
 }

@@ -68,12 +68,23 @@ class ReferenceLaneChangeSolver final : public LaneChangeSolver {
 /// Our own exact solver (fast_solver.cpp): branch and bound over the lane
 /// mode of each node, each node a structured QP solved by a Riccati-based
 /// interior-point method.
+struct FastSolverOptions {
+  /// Drop, before the search, the lane modes that no state the round can
+  /// reach satisfies (bound tightening from the dynamics, the state bounds and
+  /// the control box; docs/expert.md). It changes no answer, only the work.
+  bool reachable_modes = true;
+};
+
 class FastLaneChangeSolver final : public LaneChangeSolver {
  public:
+  explicit FastLaneChangeSolver(FastSolverOptions options = {}) : options_(options) {}
   [[nodiscard]] std::string_view name() const override { return "fast"; }
   [[nodiscard]] std::unique_ptr<LaneChangeWorkspace> make_workspace() const override;
   [[nodiscard]] LaneChangeSolution solve(const LaneChangeQp& qp, const MiqpSettings& settings,
                                          const SolveHints& hints = {}) const override;
+
+ private:
+  FastSolverOptions options_;
 };
 
 /// No search: the one structured QP of the lane modes in SolveHints::modes
