@@ -183,6 +183,11 @@ EgoControl MlpMiqpSession::network_control(const Observation& o) const {
 
 namespace {
 
+std::string network_hit(Car car, double in_seconds) {
+  return "the network would hit the " + std::string(to_string(car)) + " in " +
+         std::to_string(in_seconds) + " s";
+}
+
 // The expert's own rule (Eq. 1): once the ego's body touches the target
 // lane it keeps the safe distance ahead of the follower and behind the
 // target. A network that breaks it is about to cut in where the expert never
@@ -247,8 +252,7 @@ std::string MlpMiqpSession::roll_out(const Observation& now, EgoControl first) {
   }
   if (const auto hit = first_collision(w.ego, w.cars, *w.scene)) {
     w.step = -1;
-    return "the network would hit the " + std::string(to_string(hit->car)) + " in " +
-           std::to_string(hit->time) + " s";
+    return network_hit(hit->car, hit->time);
   }
   return "";
 }
@@ -306,8 +310,7 @@ std::string MlpMiqpSession::extend_window() {
   const std::span<const EgoState> last_step(w.ego.end() - 2, 2);
   if (const auto hit = first_collision(last_step, segment_, *w.scene)) {
     w.step = -1;
-    return "the network would hit the " + std::string(to_string(hit->car)) + " in " +
-           std::to_string(hit->time + (ahead - 1) * dt) + " s";
+    return network_hit(hit->car, hit->time + (ahead - 1) * dt);
   }
   return "";
 }

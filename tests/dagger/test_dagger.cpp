@@ -108,7 +108,7 @@ TEST(Dagger, ScenesTheClassifierRefusesAreNotRolledOut) {
 class DaggerCli : public ::testing::Test {
  protected:
   void SetUp() override {
-    testing::made_once(shared_, [this](const std::filesystem::path&) {
+    testing::made_once(shared_, [this] {
       testing::write_text(config_, nlohmann::json(small_config()).dump());
       const auto made = testing::run_cli("--config " + config_ +
                                          " generate --count 40 --seed 3 --jobs 2 --out " + data_);

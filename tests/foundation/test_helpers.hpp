@@ -48,33 +48,32 @@ class TempDir {
   std::filesystem::path path_;
 };
 
-/// dir, made once by make(dir) and then reused: test processes that need the
-/// same costly inputs (a generated data set, a trained model) wait on a lock
-/// while the first makes them. CTest empties the parent before the run
+/// Runs make() to fill dir once, then reuses it: test processes that need
+/// the same costly inputs (a generated data set, a trained model) wait on a
+/// lock while the first makes them. CTest empties the parent before the run
 /// (lanechange_add_test's SHARED_SUITES), so a run never reuses an older build's.
 template <class Make>
-std::filesystem::path made_once(const std::filesystem::path& dir, Make&& make) {
+void made_once(const std::filesystem::path& dir, Make&& make) {
   std::filesystem::create_directories(dir.parent_path());
   const std::string lock_path = dir.string() + ".lock";
   const int lock = ::open(lock_path.c_str(), O_CREAT | O_RDWR, 0644);
   if (lock < 0) {
     ADD_FAILURE() << "cannot open " << lock_path;
-    return dir;
+    return;
   }
   if (::flock(lock, LOCK_EX) != 0) {
     ::close(lock);
     ADD_FAILURE() << "cannot lock " << lock_path;
-    return dir;
+    return;
   }
   const auto done = dir / ".made";
   if (!std::filesystem::exists(done)) {
     std::filesystem::remove_all(dir);
     std::filesystem::create_directories(dir);
-    make(dir);
+    make();
     if (!::testing::Test::HasFatalFailure()) std::ofstream(done) << "made\n";
   }
   ::close(lock);  // also releases the lock
-  return dir;
 }
 
 inline void write_text(const std::string& path, const std::string& text) {

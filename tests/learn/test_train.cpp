@@ -37,7 +37,7 @@ class Trained : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
     root_ = fs::path(LANECHANGE_TEST_SHARED_DIR) / "trained";
-    testing::made_once(root_, [](const fs::path&) {
+    testing::made_once(root_, [] {
       const auto gen = testing::run_cli(testing::small_run(data_dir(), 120, 5, "--jobs 2"));
       ASSERT_EQ(gen.exit_code, 0) << gen.output;
       const TrainReport report = train_models(options(model_dir()));
