@@ -12,6 +12,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdint>
+#include <string>
 #include <utility>
 
 #include "expert/fast_solver_internal.hpp"
@@ -449,6 +450,15 @@ bool move_switch(const std::vector<int>& modes, int j, int step, std::vector<int
   return true;
 }
 
+// True when `modes` fixes every node that has lane modes: only then is its
+// QP's solution a candidate incumbent (a hint may leave nodes free).
+bool complete(const LaneChangeQp& qp, const std::vector<int>& modes) {
+  for (int k = 1; k <= qp.steps; ++k) {
+    if (!qp.node_modes[k].empty() && modes[k] == kFree) return false;
+  }
+  return true;
+}
+
 // False when some node of `modes` is fixed to a mode it cannot reach: such a
 // QP is infeasible, and need not be solved to tell.
 bool reachable(const FastWorkspace& ws, const std::vector<int>& modes) {
@@ -544,6 +554,17 @@ LaneChangeSolution FastLaneChangeSolver::solve(const LaneChangeQp& qp, const Miq
     return out;
   }
   prepare_round(qp, hints, *ws, options_.reachable_modes);
+  // Every feasible point lies in the reachable boxes and meets some mode at
+  // each node: a node where no mode can hold leaves none.
+  for (int k = 1; k <= n; ++k) {
+    if (!qp.node_modes[k].empty() && ws->possible_modes[k] == 0) {
+      out.status = MiqpStatus::Infeasible;
+      out.message = "no lane mode can hold at node ";
+      out.message += std::to_string(k);
+      out.qp_iterations = ws->iterations;
+      return out;
+    }
+  }
   double incumbent = kInfinity;
   auto accept = [&](NodeOutcome& o) {
     if (o.objective < incumbent) {
@@ -571,7 +592,7 @@ LaneChangeSolution FastLaneChangeSolver::solve(const LaneChangeQp& qp, const Miq
     if (starts.empty() || rounded != starts.front().second) starts.emplace_back(kInfinity, rounded);
     for (auto& [objective, modes] : starts) {
       if (settled()) break;
-      if (!reachable(*ws, modes)) continue;
+      if (!complete(qp, modes) || !reachable(*ws, modes)) continue;
       NodeOutcome o = solve_node(qp, modes, *ws);
       ++out.nodes;
       if (!o.feasible) continue;

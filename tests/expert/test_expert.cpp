@@ -197,6 +197,34 @@ TEST(FastSolver, ReportsAnInitialStateThatBreaksTheRules) {
   EXPECT_EQ(FastLaneChangeSolver{}.solve(qp, {}).status, MiqpStatus::Infeasible);
 }
 
+// A node where no mode can hold at all leaves the round without a feasible
+// point: both searches must say infeasible (a relaxed point with that node
+// free is no incumbent).
+TEST(FastSolver, ANodeWithNoReachableModeMakesTheRoundInfeasible) {
+  Config config;
+  const ScenarioSampler sampler(config, 29);
+  LaneChangeQp qp;
+  std::vector<int> hint;  // the optimum's modes, with the spoiled node left free
+  for (std::uint64_t i = 0; i < 40 && qp.steps == 0; ++i) {  // a scene with a plan to spoil
+    LaneChangeQp candidate = first_round_problem(sampler.sample(i), config);
+    const LaneChangeSolution optimum = FastLaneChangeSolver{}.solve(candidate, {});
+    if (optimum.status != MiqpStatus::Optimal) continue;
+    qp = candidate;
+    hint = optimum.modes;
+  }
+  ASSERT_GT(qp.steps, 10);
+  HalfSpace unreachable;
+  unreachable.g = Eigen::Vector4d::Unit(kY);
+  unreachable.upper = -100.0;  // far below the road
+  for (LaneMode& mode : qp.node_modes[10]) mode.rows.push_back(unreachable);
+  hint[10] = -1;
+  for (const FastSolverOptions options : {FastSolverOptions{}, FastSolverOptions{false}}) {
+    const LaneChangeSolution s = FastLaneChangeSolver(options).solve(qp, {}, {nullptr, &hint});
+    EXPECT_EQ(s.status, MiqpStatus::Infeasible) << s.message;
+    EXPECT_FALSE(s.has_solution());
+  }
+}
+
 // Dropping the modes no reachable state meets is bound tightening: on
 // sampled paper-size problems of both rules the optimum and the verdict must
 // not move, and the search must do less work over all of them.
