@@ -9,6 +9,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 
 #include "common/json_fields.hpp"
 #include "dagger/collect.hpp"
@@ -18,6 +19,7 @@
 #include "lanechange/learn/model.hpp"
 #include "lanechange/sim/evaluate.hpp"
 #include "planner/mlp_miqp_planner.hpp"
+#include "sim/evaluation_files.hpp"
 
 namespace lanechange::dagger {
 
@@ -54,6 +56,8 @@ void validate(const DaggerOptions& o) {
   for (const std::string& dir : o.train.data_dirs) {
     require(fs::is_directory(dir), "--data", dir + " is not a directory");
   }
+  require(o.base_model.empty() || has_model(o.base_model), "base_model",
+          o.base_model + " holds no model");
 }
 
 // What fixes the run's content; a resume must match it (rounds may grow).
@@ -71,6 +75,7 @@ json run_parameters(const DaggerOptions& o) {
           {"max_epochs", o.train.network.max_epochs},
           {"every_scene", o.every_scene},
           {"validate_on_dagger", o.validate_on_dagger},
+          {"base_model", o.base_model},
           {"config", config}};
 }
 
@@ -228,12 +233,7 @@ void publish_copy(const std::string& from, const std::string& to) {
 }
 
 void write_tables(const DaggerOptions& o, const DaggerReport& report) {
-  std::string csv;
-  for (const std::string& c : table_columns()) {
-    if (!csv.empty()) csv += ',';
-    csv += c;
-  }
-  csv += '\n';
+  std::string csv = sim::detail::csv_header(table_columns());
   std::vector<RoundRow> rows = report.rounds;
   rows.push_back(report.expert);
   for (const RoundRow& r : rows) {
@@ -290,11 +290,54 @@ std::string markdown_table(const DaggerReport& report) {
   return md;
 }
 
+DaggerReport read_report(const std::string& work_dir) {
+  const std::string path = (fs::path(work_dir) / "dagger.csv").string();
+  std::ifstream in(path);
+  if (!in) throw InputError(path, "cannot open the DAgger table");
+  std::string line;
+  std::getline(in, line);
+  if (line + "\n" != sim::detail::csv_header(table_columns())) {
+    throw InputError(path, "is not a DAgger table of this version (its header differs)");
+  }
+  DaggerReport report;
+  long long number = 1;
+  while (std::getline(in, line)) {
+    ++number;
+    if (line.empty()) continue;
+    std::istringstream cells(line);
+    RoundRow r;
+    std::string round;
+    std::string rollouts;
+    std::vector<std::string> rest(6);
+    std::getline(cells, round, ',');
+    std::getline(cells, r.planner, ',');
+    std::getline(cells, rollouts, ',');
+    for (std::string& cell : rest) std::getline(cells, cell, ',');
+    try {
+      r.round = std::stoi(round);
+      r.rollouts = std::stoll(rollouts);
+      r.success_rate = std::stod(rest[0]);
+      r.takeovers_per_rollout = std::stod(rest[1]);
+      r.collision_rate = std::stod(rest[2]);
+      r.at_fault_collision_rate = std::stod(rest[3]);
+      r.labels = std::stoll(rest[4]);
+      r.dagger_samples = std::stoll(rest[5]);
+    } catch (const std::exception&) {
+      throw InputError(path, "line " + std::to_string(number) + " is malformed");
+    }
+    (r.round < 0 ? report.expert : report.rounds.emplace_back()) = r;
+  }
+  if (report.rounds.empty()) throw InputError(path, "holds no round");
+  return report;
+}
+
 DaggerReport run(const DaggerOptions& options, std::ostream* progress) {
   validate(options);
   prepare_work_dir(options);
   DaggerReport report;
-  if (!has_model(model_dir(options, 0))) {
+  if (!has_model(model_dir(options, 0)) && !options.base_model.empty()) {
+    publish_copy(options.base_model, model_dir(options, 0));
+  } else if (!has_model(model_dir(options, 0))) {
     learn::TrainOptions train = options.train;
     train.out_dir = model_dir(options, 0);
     (void)learn::train_models(train);

@@ -15,6 +15,7 @@
 #include "experiments/stages.hpp"
 #include "experiments/tables.hpp"
 #include "lanechange/baselines/baselines.hpp"
+#include "lanechange/dagger/dagger.hpp"
 #include "lanechange/data/dataset.hpp"
 #include "lanechange/error.hpp"
 #include "lanechange/learn/train.hpp"
@@ -37,6 +38,9 @@ constexpr std::uint64_t kDataSeed = 101;
 constexpr std::uint64_t kEvalSeed = 2026;
 constexpr std::uint64_t kTrainSeed = 1;
 constexpr double kTestShare = 0.2;  // the paper's 1000 of 5000
+// DAgger's training scenes (docs/strategy.md's seed), and every 2nd step labelled.
+constexpr std::uint64_t kDaggerSeed = 7001;
+constexpr int kDaggerStride = 2;
 
 std::uint64_t seed_of(std::uint64_t base, std::size_t behavior) { return base + behavior; }
 
@@ -204,7 +208,7 @@ void draw_examples(const Context& c, const std::vector<ExampleScene>& scenes) {
   }
 }
 
-void train(const Context& c) {
+learn::TrainOptions train_options(const Context& c) {
   learn::TrainOptions t;
   t.data_dirs = per_behavior_dirs(c, "data");
   t.out_dir = path_in(c, "model");
@@ -215,7 +219,34 @@ void train(const Context& c) {
   t.network.max_epochs = c.sizes.max_epochs;
   t.plots = c.options.figures;
   t.progress = c.options.progress;
-  (void)learn::train_models(t);
+  return t;
+}
+
+void train(const Context& c) { (void)learn::train_models(train_options(c)); }
+
+// DAgger from the experiments' model: its rounds' models, labels and
+// evaluations stay under dagger/.
+dagger::DaggerOptions dagger_options(const Context& c) {
+  dagger::DaggerOptions d;
+  d.train = train_options(c);
+  d.train.out_dir = path_in(c, "dagger/model");
+  d.train.plots = false;
+  d.work_dir = path_in(c, "dagger/rounds");
+  d.base_model = path_in(c, "model");
+  d.rounds = c.sizes.dagger_rounds;
+  d.scenes = c.sizes.dagger_scenes;
+  d.scene_seed = kDaggerSeed;
+  d.stride = kDaggerStride;
+  d.eval_count = 3 * c.sizes.eval_per_behavior;
+  d.eval_seed = kEvalSeed;
+  d.config = c.options.config;
+  d.jobs = c.options.jobs;
+  return d;
+}
+
+bool runs_dagger(const Context& c) {
+  return c.sizes.dagger_rounds > 0 &&
+         std::find(c.planners.begin(), c.planners.end(), "mlp-miqp") != c.planners.end();
 }
 
 void draw_summary_figures(const Context& c, const std::vector<sim::RolloutRow>& rows) {
@@ -251,9 +282,9 @@ Scale scale_from_string(std::string_view name, std::string_view field) {
 
 ExperimentSizes sizes_of(Scale scale) {
   switch (scale) {
-    case Scale::Tiny: return {12, 2, true, 20, 2};
-    case Scale::Small: return {150, 20, true, 150, 4};
-    case Scale::Paper: return {5000, 500, false, 300, 4};
+    case Scale::Tiny: return {12, 2, true, 20, 2, 1, 3};
+    case Scale::Small: return {150, 20, true, 150, 4, 2, 40};
+    case Scale::Paper: return {5000, 500, false, 300, 4, 4, 150};
   }
   return {};
 }
@@ -313,8 +344,19 @@ ExperimentReport run_experiments(const ExperimentOptions& o) {
     (void)stages.run("evaluate-either_or", eval_inputs, {"eval/either_or"}, StageRunner::Ranks::All,
                      [&] { evaluate_sets(c, "eval/either_or", either_or, expert_planners); });
   }
+  json figure_inputs = {{"evaluation", footprint}, {"labels", labels}};
+  if (runs_dagger(c)) {
+    figure_inputs["dagger"] = stages.run("dagger",
+                                         {{"base", c.base_inputs},
+                                          {"models", models},
+                                          {"rounds", c.sizes.dagger_rounds},
+                                          {"scenes", c.sizes.dagger_scenes},
+                                          {"eval_count", 3 * c.sizes.eval_per_behavior}},
+                                         {"dagger"}, StageRunner::Ranks::First, [&] {
+                                           (void)dagger::run(dagger_options(c), c.options.progress);
+                                         });
+  }
   ExperimentReport out;
-  const json figure_inputs = {{"evaluation", footprint}, {"labels", labels}};
   if (team.rank() != 0) {
     // The figures and the report are rank 0's; the others wait for it.
     if (o.figures) {
@@ -330,6 +372,10 @@ ExperimentReport run_experiments(const ExperimentOptions& o) {
     (void)stages.run("figures", figure_inputs, {"figures"}, StageRunner::Ranks::First, [&] {
       fs::create_directories(c.dir / "figures");
       draw_summary_figures(c, rows);
+      if (runs_dagger(c)) {
+        plot_dagger(dagger::read_report(dagger_options(c).work_dir),
+                    path_in(c, "figures/dagger.png"));
+      }
       draw_examples(c, examples);
     });
   }
@@ -347,6 +393,11 @@ ExperimentReport run_experiments(const ExperimentOptions& o) {
     }
   }
   report.labels = expert_labels;
+  if (runs_dagger(c)) {
+    const auto d = dagger_options(c);
+    report.dagger = dagger::read_report(d.work_dir);
+    report.dagger_options = d;
+  }
   report.examples = examples;
   report.seeds = {{"data", kDataSeed}, {"evaluation", kEvalSeed}, {"train", kTrainSeed}};
   report.stages = stages.records();

@@ -91,4 +91,30 @@ void plot_step_times(const std::vector<sim::RolloutRow>& rows,
       png_path);
 }
 
+void plot_dagger(const dagger::DaggerReport& report, const std::string& png_path) {
+  std::ostringstream data;
+  data << "$rounds << EOD\n";
+  for (const auto& r : report.rounds) {
+    data << r.round << ' ' << 100.0 * r.success_rate << ' ' << r.takeovers_per_rollout << "\n";
+  }
+  data << "EOD\n";
+  const double expert = 100.0 * report.expert.success_rate;
+  const int last = report.rounds.empty() ? 1 : std::max(1, report.rounds.back().round);
+  render_png(
+      [&](const std::string& png) {
+        return header(png, "DAgger: mlp-miqp on held-out scenes after each round") + data.str() +
+               "set xrange [-0.2:" + std::to_string(last) +
+               ".2]\nset xtics 1\n"
+               "set xlabel 'DAgger round (0: before DAgger)'\nset yrange [0:100]\n"
+               "set ylabel 'success [%]'\nset y2range [0:*]\nset y2tics\n"
+               "set y2label 'take-overs per rollout'\n"
+               "plot $rounds using 1:2 with linespoints lw 2 pt 7 title 'mlp-miqp success', " +
+               std::to_string(expert) +
+               " with lines dt 2 lw 2 title 'miqp success', "
+               "$rounds using 1:3 axes x1y2 with linespoints lw 2 pt 5 title 'take-overs per "
+               "rollout'\n";
+      },
+      png_path);
+}
+
 }  // namespace lanechange::experiments

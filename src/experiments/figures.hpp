@@ -3,6 +3,7 @@
 #include <string>
 #include <vector>
 
+#include "lanechange/dagger/dagger.hpp"
 #include "lanechange/sim/evaluate.hpp"
 
 namespace lanechange::experiments {
@@ -15,5 +16,9 @@ void plot_success_bars(const std::vector<sim::RolloutRow>& rows,
 /// cumulative shares over a logarithmic time axis.
 void plot_step_times(const std::vector<sim::RolloutRow>& rows,
                      const std::vector<std::string>& planners, const std::string& png_path);
+
+/// The DAgger curve: mlp-miqp's success and take-overs per round, with
+/// miqp's success as the line to reach.
+void plot_dagger(const dagger::DaggerReport& report, const std::string& png_path);
 
 }  // namespace lanechange::experiments

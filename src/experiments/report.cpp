@@ -118,6 +118,26 @@ void table_two(Document& d, int level, const std::string& rule,
   if (!verdicts.empty()) d.bullets(verdicts);
 }
 
+void dagger_section(Document& d, const ReportInputs& in) {
+  const dagger::DaggerOptions& o = in.dagger_options;
+  d.heading(2, "DAgger for the action network (beyond the paper)");
+  d.paragraph(
+      "The paper names DAgger (Ross et al. 2011) as future work (docs/strategy.md). Each round "
+      "rolls mlp-miqp with the last round's network out on " +
+      std::to_string(o.scenes) + " fresh training scenes (seed " + std::to_string(o.scene_seed) +
+      " on), has the closed-loop expert label the states the network drives into (every " +
+      std::to_string(o.stride) +
+      " steps), adds those labels to the expert's data and retrains the "
+      "network; round 0 is the model above. mlp-miqp is then scored on " +
+      std::to_string(o.eval_count) + " held-out scenes of all behaviors (seed " +
+      std::to_string(o.eval_seed) +
+      "), and miqp once on the same scenes. The same run alone: "
+      "`lanechange train --data DATA... --dagger R` (docs/strategy.md).");
+  d.table(dagger_table(*in.dagger));
+  d.bullets(dagger_verdicts(*in.dagger));
+  d.figure("figures/dagger.png", "DAgger: mlp-miqp's success and take-overs per round.");
+}
+
 }  // namespace
 
 Document build_report(const ReportInputs& in) {
@@ -148,6 +168,7 @@ Document build_report(const ReportInputs& in) {
     d.heading(3, "Table III (either_or lane rule)");
     d.table(behavior_table(in.either_or, in.planners));
   }
+  if (in.dagger) dagger_section(d, in);
   d.heading(2, "Example rollouts");
   if (in.examples.empty()) d.paragraph("No scene of this run qualified as an example.");
   for (const auto& scene : in.examples) {

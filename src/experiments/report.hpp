@@ -2,6 +2,7 @@
 // The report of a run: every number read from the run's own files.
 #include <map>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -29,6 +30,8 @@ struct ReportInputs {
   std::vector<sim::RolloutRow> either_or;    ///< the literal rule (baselines' rows copied)
   ExpertLabels labels;
   std::vector<ExampleScene> examples;
+  std::optional<dagger::DaggerReport> dagger;  ///< none when DAgger did not run
+  dagger::DaggerOptions dagger_options;
   std::map<std::string, std::uint64_t> seeds;
   std::vector<StageRecord> stages;
   double wall_s = 0.0;

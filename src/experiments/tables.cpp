@@ -113,6 +113,41 @@ std::string percent(long long part, long long whole) {
   return fixed(100.0 * static_cast<double>(part) / static_cast<double>(whole), 1) + "%";
 }
 
+Table dagger_table(const dagger::DaggerReport& report) {
+  Table t{{"round", "planner", "rollouts", "success", "take-overs per rollout", "collisions",
+           "at-fault collisions", "new well-posed labels", "DAgger samples so far"},
+          {}};
+  std::vector<dagger::RoundRow> rows = report.rounds;
+  rows.push_back(report.expert);
+  for (const auto& r : rows) {
+    t.rows.push_back({r.round < 0 ? "-" : std::to_string(r.round), r.planner,
+                      std::to_string(r.rollouts), fixed(100.0 * r.success_rate, 1) + "%",
+                      fixed(r.takeovers_per_rollout, 2), fixed(100.0 * r.collision_rate, 1) + "%",
+                      fixed(100.0 * r.at_fault_collision_rate, 1) + "%", std::to_string(r.labels),
+                      std::to_string(r.dagger_samples)});
+  }
+  return t;
+}
+
+std::vector<std::string> dagger_verdicts(const dagger::DaggerReport& report) {
+  const auto& rounds = report.rounds;
+  if (rounds.size() < 2) return {"No DAgger round ran."};
+  int falling = 0;
+  for (std::size_t r = 1; r < rounds.size(); ++r) {
+    falling += rounds[r].takeovers_per_rollout < rounds[r - 1].takeovers_per_rollout ? 1 : 0;
+  }
+  const int steps = static_cast<int>(rounds.size()) - 1;
+  const double gap = 100.0 * (report.expert.success_rate - rounds.back().success_rate);
+  return {
+      std::string(falling == steps ? "Met" : "Not met") +
+          ": fewer take-overs per rollout with every round (" + std::to_string(falling) + " of " +
+          std::to_string(steps) + " rounds lower than the round before).",
+      std::string(gap <= 2.0 ? "Met" : "Not met") +
+          ": mlp-miqp within 2 points of miqp after DAgger (" + fixed(gap, 1) +
+          " points below miqp after round " + std::to_string(steps) + ").",
+  };
+}
+
 ExpertLabels read_expert_labels(const std::vector<std::string>& dataset_dirs) {
   ExpertLabels labels;
   for (const auto& dir : dataset_dirs) {

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "experiments/document.hpp"
+#include "lanechange/dagger/dagger.hpp"
 #include "lanechange/sim/evaluate.hpp"
 
 namespace lanechange::experiments {
@@ -42,6 +43,12 @@ struct GeneralizationResult {
 /// measured reasons (aborts, take-overs, collisions).
 [[nodiscard]] std::vector<std::string> where_others_beat_ours(
     const std::vector<sim::RolloutRow>& rows, const std::vector<std::string>& planners);
+
+/// DAgger's rounds (0: before DAgger) and the expert for reference.
+[[nodiscard]] Table dagger_table(const dagger::DaggerReport& report);
+/// Issue 14's two DAgger targets, judged on the rows: take-overs fall with
+/// every round, and mlp-miqp ends within 2 points of miqp's success.
+[[nodiscard]] std::vector<std::string> dagger_verdicts(const dagger::DaggerReport& report);
 
 /// The share as a percentage with one decimal ("–" for an empty set).
 [[nodiscard]] std::string percent(long long part, long long whole);

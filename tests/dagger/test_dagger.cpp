@@ -5,7 +5,9 @@
 #include <sstream>
 
 #include "dagger/collect.hpp"
+#include "lanechange/dagger/dagger.hpp"
 #include "lanechange/data/dataset.hpp"
+#include "lanechange/error.hpp"
 #include "lanechange/learn/learn_data.hpp"
 #include "lanechange/learn/model.hpp"
 #include "lanechange/learn/train.hpp"
@@ -210,6 +212,20 @@ TEST_F(DaggerCli, OneRoundAddsLabelsAsAValidDataSetAndTabulatesEachRound) {
   ASSERT_EQ(again.exit_code, 0) << again.output;
   EXPECT_EQ(again.output.find("expert queries"), std::string::npos) << again.output;
   EXPECT_EQ(testing::read_text(work + "/dagger.csv"), csv);
+
+  // The table reads back as written (the experiments report reads it); a
+  // damaged one is refused by name.
+  const dagger::DaggerReport back = dagger::read_report(work);
+  ASSERT_EQ(back.rounds.size(), 2U);
+  EXPECT_EQ(back.expert.planner, "miqp");
+  EXPECT_EQ(back.rounds[1].dagger_samples, std::stoll(table[2][8]));
+  EXPECT_DOUBLE_EQ(back.rounds[0].success_rate, std::stod(table[1][3]));
+  const std::string damaged = dir_.file("damaged");
+  fs::create_directories(damaged);
+  testing::write_text(damaged + "/dagger.csv",
+                      csv.substr(0, csv.find('\n') + 1) + "0,mlp-miqp,six\n");
+  EXPECT_THROW((void)dagger::read_report(damaged), InputError);
+  EXPECT_THROW((void)dagger::read_report(dir_.file("nowhere")), InputError);
 }
 
 TEST_F(DaggerCli, BadOptionsAreRefusedAndWriteNothing) {

@@ -6,6 +6,7 @@
 #include <filesystem>
 
 #include "lanechange/baselines/baselines.hpp"
+#include "lanechange/dagger/dagger.hpp"
 #include "lanechange/error.hpp"
 #include "lanechange/experiments/experiments.hpp"
 #include "test_helpers.hpp"
@@ -40,7 +41,8 @@ TEST(Experiments, ATinyRunWritesEveryTableAndFigureAndARerunReusesItsStages) {
   const std::string md = testing::read_text(first.report_md);
   for (const char* section :
        {"Table I", "Table II: planners in closed loop (footprint", "Table III", "Generalization",
-        "either_or lane rule", "Example rollouts", "85.171%", "93.1%"}) {
+        "either_or lane rule", "Example rollouts", "85.171%", "93.1%",
+        "DAgger for the action network", "fewer take-overs per rollout with every round"}) {
     EXPECT_NE(md.find(section), std::string::npos) << section;
   }
   // Every planner has a row in Table II, and every row has a number of scenes.
@@ -57,7 +59,17 @@ TEST(Experiments, ATinyRunWritesEveryTableAndFigureAndARerunReusesItsStages) {
     EXPECT_TRUE(fs::exists(fs::path(o.out_dir) / path)) << path;
     ++pictures;
   }
-  EXPECT_GE(pictures, 4);  // confusion matrix, success bars, step times, an example
+  EXPECT_GE(pictures, 5);  // confusion matrix, success bars, step times, DAgger, an example
+  // DAgger's round 0 is the experiments' model, and its round 1 a data set of labels.
+  EXPECT_TRUE(fs::exists(fs::path(o.out_dir) / "figures/dagger.png"));
+  EXPECT_TRUE(fs::exists(fs::path(o.out_dir) / "dagger/rounds/model-1/model.json"));
+  EXPECT_EQ(testing::read_text(o.out_dir + "/dagger/rounds/model-0/model.json"),
+            testing::read_text(o.out_dir + "/model/model.json"));
+  const auto rows = dagger::read_report(o.out_dir + "/dagger/rounds");
+  ASSERT_EQ(rows.rounds.size(), 2U);
+  EXPECT_EQ(rows.rounds[1].round, 1);
+  EXPECT_EQ(rows.expert.planner, "miqp");
+  EXPECT_EQ(rows.expert.rollouts, 3);
   const std::string html = testing::read_text(first.report_html);
   EXPECT_EQ(html.find("missing picture"), std::string::npos);
   EXPECT_NE(html.find("data:image/png;base64,iVBORw0KGgo"), std::string::npos);

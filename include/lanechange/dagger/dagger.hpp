@@ -35,6 +35,9 @@ struct DaggerOptions {
   bool validate_on_dagger = false;
   Config config;  ///< the closed loop's (rollouts, labels, evaluations)
   int jobs = 0;   ///< threads; 0: one per core
+  /// A model already trained with `train` to be round 0 (copied into
+  /// work_dir/model-0) instead of training one: the experiments' own model.
+  std::string base_model;
 };
 
 /// One row of dagger.csv: mlp-miqp with round r's model (round 0: before
@@ -65,5 +68,10 @@ DaggerReport run(const DaggerOptions& options, std::ostream* progress);
 /// dagger.csv's columns, and the same rows as a markdown table.
 [[nodiscard]] std::vector<std::string> table_columns();
 [[nodiscard]] std::string markdown_table(const DaggerReport& report);
+
+/// The rows of a finished run, read back from work_dir/dagger.csv (the
+/// data set's path is not kept there). InputError naming the file when it
+/// is missing or malformed.
+[[nodiscard]] DaggerReport read_report(const std::string& work_dir);
 
 }  // namespace lanechange::dagger

@@ -2,7 +2,7 @@
 // `lanechange experiments` (docs/experiments.md): one command that runs the
 // paper's experiments end to end — expert data, models, Table I, the closed
 // loop of every planner (Tables II and III under both lane rules), the
-// generalization test and the figures — and writes a report with the paper's
+// generalization test, DAgger and the figures — and writes a report with the paper's
 // numbers beside ours. Every stage records its inputs; a rerun reuses a stage
 // whose inputs have not changed and resumes one that was killed.
 #include <ostream>
@@ -32,6 +32,11 @@ struct ExperimentSizes {
   /// Scenes drawn for every planner: a congested one and ill-posed ones (the
   /// paper's Figs. 4 and 5).
   int example_scenes = 4;
+  /// DAgger on the experiments' model (issue 14): rounds and the training
+  /// scenes rolled out per round; mlp-miqp is scored after every round on as
+  /// many held-out scenes as Table II has, of all behaviors.
+  int dagger_rounds = 0;
+  long long dagger_scenes = 0;
 };
 [[nodiscard]] ExperimentSizes sizes_of(Scale scale);
 
