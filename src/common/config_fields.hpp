@@ -196,6 +196,8 @@ void visit_fields(V& v, S& s) requires std::same_as<std::remove_const_t<S>, Latt
 template <class V, class S>
 void visit_fields(V& v, S& s) requires std::same_as<std::remove_const_t<S>, StrategyQpSettings> {
   v("candidates", s.candidates);
+  v("screen", s.screen);
+  v("screen_keep", s.screen_keep);
   v("first_feasible", s.first_feasible);
 }
 

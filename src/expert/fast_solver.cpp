@@ -336,6 +336,33 @@ unsigned modes_meeting_box(const LaneChangeQp& qp, int k, const State& lo, const
 // node's box satisfies is no choice there. This is bound tightening, not a
 // heuristic: the search stays exact. A node with one mode left is fixed from
 // the root on, and the ramp of a node is drawn between its reachable modes.
+// The box of node k + 1's states, from node k's box [lo, hi] through the
+// round's linear dynamics with every control in its box, cut to the state
+// bounds (and the fixed terminal y). Empty (some lo > hi) when no state holds.
+void next_box(const LaneChangeQp& qp, int k, State& lo, State& hi) {
+  const StageDynamics& d = qp.dynamics[k];
+  State next_lo = d.c;
+  State next_hi = d.c;
+  for (int i = 0; i < 4; ++i) {
+    for (int j = 0; j < 4; ++j) {
+      const double a = d.A(i, j);
+      next_lo[i] += a * (a > 0.0 ? lo[j] : hi[j]);
+      next_hi[i] += a * (a > 0.0 ? hi[j] : lo[j]);
+    }
+    for (int j = 0; j < 2; ++j) {
+      const double b = d.B(i, j);
+      next_lo[i] += b * (b > 0.0 ? qp.control_lower[j] : qp.control_upper[j]);
+      next_hi[i] += b * (b > 0.0 ? qp.control_upper[j] : qp.control_lower[j]);
+    }
+  }
+  lo = next_lo.cwiseMax(qp.state_lower[k + 1]);
+  hi = next_hi.cwiseMin(qp.state_upper[k + 1]);
+  if (k + 1 == qp.steps && qp.terminal_lateral_fixed) {
+    lo[kY] = std::max(lo[kY], qp.lateral_reference);
+    hi[kY] = std::min(hi[kY], qp.lateral_reference);
+  }
+}
+
 void find_possible_modes(const LaneChangeQp& qp, FastWorkspace& ws) {
   const int n = qp.steps;
   ws.reach_lower.assign(n + 1, State::Constant(-kInfinity));
@@ -343,27 +370,7 @@ void find_possible_modes(const LaneChangeQp& qp, FastWorkspace& ws) {
   State lo = qp.initial_state;
   State hi = qp.initial_state;
   for (int k = 0; k < n; ++k) {
-    const StageDynamics& d = qp.dynamics[k];
-    State next_lo = d.c;
-    State next_hi = d.c;
-    for (int i = 0; i < 4; ++i) {
-      for (int j = 0; j < 4; ++j) {
-        const double a = d.A(i, j);
-        next_lo[i] += a * (a > 0.0 ? lo[j] : hi[j]);
-        next_hi[i] += a * (a > 0.0 ? hi[j] : lo[j]);
-      }
-      for (int j = 0; j < 2; ++j) {
-        const double b = d.B(i, j);
-        next_lo[i] += b * (b > 0.0 ? qp.control_lower[j] : qp.control_upper[j]);
-        next_hi[i] += b * (b > 0.0 ? qp.control_upper[j] : qp.control_lower[j]);
-      }
-    }
-    lo = next_lo.cwiseMax(qp.state_lower[k + 1]);
-    hi = next_hi.cwiseMin(qp.state_upper[k + 1]);
-    if (k + 1 == n && qp.terminal_lateral_fixed) {
-      lo[kY] = std::max(lo[kY], qp.lateral_reference);
-      hi[kY] = std::min(hi[kY], qp.lateral_reference);
-    }
+    next_box(qp, k, lo, hi);
     // An empty box means the round has no feasible point; let the QPs show it.
     if ((lo.array() > hi.array()).any()) return;
     ws.reach_lower[k + 1] = lo;
@@ -373,7 +380,45 @@ void find_possible_modes(const LaneChangeQp& qp, FastWorkspace& ws) {
   }
 }
 
+// Cuts the box [lo, hi] to the row g'z <= upper: each component's bound
+// given the least the others can contribute. The row is widened by a margin
+// that keeps any point the QP would accept (its rows hold to about 1e-6).
+void cut_to_row(const HalfSpace& h, State& lo, State& hi) {
+  const double upper = h.upper + kBoxMargin * (1.0 + std::abs(h.upper));
+  for (int j = 0; j < 4; ++j) {
+    const double g = h.g[j];
+    if (g == 0.0) continue;
+    double rest = 0.0;
+    for (int i = 0; i < 4; ++i) {
+      if (i != j && h.g[i] != 0.0) rest += h.g[i] * (h.g[i] > 0.0 ? lo[i] : hi[i]);
+    }
+    if (!std::isfinite(rest)) continue;
+    if (g > 0.0) hi[j] = std::min(hi[j], (upper - rest) / g);
+    if (g < 0.0) lo[j] = std::max(lo[j], (upper - rest) / g);
+  }
+}
+
 }  // namespace
+
+bool modes_can_hold(const LaneChangeQp& qp, const std::vector<int>& modes) {
+  State lo = qp.initial_state;
+  State hi = qp.initial_state;
+  for (int k = 0; k < qp.steps; ++k) {
+    next_box(qp, k, lo, hi);
+    const auto& choices = qp.node_modes[static_cast<std::size_t>(k) + 1];
+    const int m = modes[static_cast<std::size_t>(k) + 1];
+    if (m >= 0 && static_cast<std::size_t>(m) < choices.size()) {
+      // Twice: a row cut by a later one may cut again.
+      for (int pass = 0; pass < 2; ++pass) {
+        for (const HalfSpace& h : choices[static_cast<std::size_t>(m)].rows) cut_to_row(h, lo, hi);
+      }
+    }
+    const State slack = kBoxMargin * (State::Ones() + lo.cwiseAbs());
+    if ((lo.array() > (hi + slack).array()).any()) return false;
+    hi = hi.cwiseMax(lo);  // within the margin: a point, not an empty box
+  }
+  return true;
+}
 
 void prepare_round(const LaneChangeQp& qp, const SolveHints& hints, FastWorkspace& ws,
                    bool reachable_modes) {

@@ -11,6 +11,9 @@ namespace lanechange::expert::detail {
 
 inline constexpr int kFreeMode = -1;            ///< a node of a search whose mode is not fixed
 inline constexpr double kModeTolerance = 1e-6;  ///< m: a lane row may be this far off and hold
+/// Relative widening of a row, and of a box, in the bound tightening of
+/// `modes_can_hold`: far above the QP's own tolerance, far below a lane.
+inline constexpr double kBoxMargin = 1e-5;
 
 struct FastWorkspace final : LaneChangeWorkspace {
   StructuredQp base;  // dynamics, costs and bounds of the round
@@ -43,6 +46,14 @@ FastWorkspace& workspace_for(const SolveHints& hints, std::unique_ptr<LaneChange
 
 /// True when some mode of node 0 holds at the initial state (or none applies).
 [[nodiscard]] bool initial_state_allowed(const LaneChangeQp& qp);
+
+/// False when the lane modes (a mode per node; -1 or kFreeMode: no rows)
+/// can hold at no state the round can reach: boxes of the states carried
+/// through the linear dynamics with every control in its box and cut to the
+/// state bounds and to each node's mode rows. Bound tightening, so it never
+/// refuses modes the QP could meet; it catches a gap the ego cannot reach
+/// without the 60 iterations an interior-point method takes to give up.
+[[nodiscard]] bool modes_can_hold(const LaneChangeQp& qp, const std::vector<int>& modes);
 
 /// Readies `ws` for the QPs of one round: the base problem without lane rows,
 /// the starting controls (the hint's, strictly inside the bounds) and, with

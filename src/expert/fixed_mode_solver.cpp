@@ -49,6 +49,9 @@ LaneChangeSolution FixedModeLaneChangeSolver::solve(const LaneChangeQp& qp,
   if (out.message.empty() && !detail::initial_state_allowed(qp)) {
     out.message = "the initial state breaks the lane rules";
   }
+  if (out.message.empty() && !detail::modes_can_hold(qp, *hints.modes)) {
+    out.message = "no reachable state meets the lane modes";
+  }
   if (!out.message.empty()) return out;
   std::unique_ptr<LaneChangeWorkspace> owned;
   detail::FastWorkspace& ws = detail::workspace_for(hints, owned);

@@ -99,6 +99,31 @@ void restrict_to_box(LaneChangeQp& qp, const Iterate& point, double radius) {
   }
 }
 
+// The round's MIQP about `point`; cars that react to the ego (IDM) are
+// predicted again along it, into `prediction`.
+LaneChangeQp linearized_qp(const Scenario& scenario, const Config& config, int predicted_steps,
+                           double dt, const Iterate& point, TrafficPrediction& prediction) {
+  if (scenario.behavior == Behavior::Idm) {
+    const auto ego_path = footprint_of(point);
+    prediction = predict_traffic(scenario, config, predicted_steps, dt, &ego_path);
+  }
+  return build_lane_change_qp(scenario, config, point, prediction);
+}
+
+// The first linearization point: the hint's path where it fits, else the
+// configured warm start.
+Iterate first_point(const Scenario& scenario, const Config& config, const PlanHints& hints,
+                    const TrafficPrediction& prediction) {
+  const auto nodes = static_cast<std::size_t>(scenario.steps) + 1;
+  const bool path_fits = hints.path != nullptr && hints.path->states.size() == nodes &&
+                         hints.path->controls.size() == nodes - 1;
+  return path_fits ? *hints.path : warm_start(scenario, config, prediction);
+}
+
+int predicted_steps_of(const Scenario& scenario, const Config& config) {
+  return scenario.steps + config.expert.prediction_lead_steps;
+}
+
 struct RoundSolution {
   LaneChangeSolution solution;
   std::vector<std::optional<LaneOccupancy>> occupancy;  ///< of the solution's modes
@@ -109,11 +134,8 @@ struct RoundSolution {
 // point when finite). Updates the prediction the result reports.
 RoundSolution solve_round(const RoundContext& c, const Iterate& point, double radius,
                           ExpertResult& result) {
-  if (c.scenario.behavior == Behavior::Idm) {
-    const auto ego_path = footprint_of(point);
-    result.prediction = predict_traffic(c.scenario, c.config, c.predicted_steps, c.dt, &ego_path);
-  }
-  LaneChangeQp qp = build_lane_change_qp(c.scenario, c.config, point, result.prediction);
+  LaneChangeQp qp =
+      linearized_qp(c.scenario, c.config, c.predicted_steps, c.dt, point, result.prediction);
   if (std::isfinite(radius)) restrict_to_box(qp, point, radius);
   MiqpSettings settings;
   settings.time_limit_s = std::max(0.001, c.time_limit_s - elapsed_ms(c.start) / 1000.0);
@@ -334,8 +356,6 @@ ExpertResult ExpertPlanner::plan(const Scenario& scenario, const PlanLimits& lim
   const double dt = scenario.horizon / scenario.steps;
   const auto workspace = solver_->make_workspace();
   const auto nodes = static_cast<std::size_t>(scenario.steps) + 1;
-  const bool path_fits = hints.path != nullptr && hints.path->states.size() == nodes &&
-                         hints.path->controls.size() == nodes - 1;
   const bool modes_fit = hints.modes != nullptr && hints.modes->size() == nodes;
   const RoundContext context{scenario,
                              config,
@@ -343,14 +363,13 @@ ExpertResult ExpertPlanner::plan(const Scenario& scenario, const PlanLimits& lim
                              workspace.get(),
                              start,
                              limits.time_limit_s,
-                             scenario.steps + config.expert.prediction_lead_steps,
+                             predicted_steps_of(scenario, config),
                              dt,
                              modes_fit ? hints.modes : nullptr};
   ExpertResult result;
   result.prediction = predict_traffic(scenario, config, context.predicted_steps, dt);
   Iterate previous;
-  plain_rounds(context, path_fits ? *hints.path : warm_start(scenario, config, result.prediction),
-               result, previous);
+  plain_rounds(context, first_point(scenario, config, hints, result.prediction), result, previous);
   const bool failed_to_converge =
       result.status == PlanStatus::Cycling || result.status == PlanStatus::IterationLimit;
   if (failed_to_converge && config.expert.globalisation == Globalisation::TrustRegion) {
@@ -362,6 +381,17 @@ ExpertResult ExpertPlanner::plan(const Scenario& scenario, const PlanLimits& lim
   }
   result.total_ms = elapsed_ms(start);
   return result;
+}
+
+LinearizedRound ExpertPlanner::first_round(const Scenario& scenario, const PlanHints& hints) const {
+  const Config config = effective_config(config_, scenario);
+  const double dt = scenario.horizon / scenario.steps;
+  const int predicted_steps = predicted_steps_of(scenario, config);
+  TrafficPrediction prediction = predict_traffic(scenario, config, predicted_steps, dt);
+  LinearizedRound out;
+  out.point = first_point(scenario, config, hints, prediction);
+  out.qp = linearized_qp(scenario, config, predicted_steps, dt, out.point, prediction);
+  return out;
 }
 
 Trajectory ExpertPlanner::to_trajectory(const ExpertResult& result,

@@ -43,67 +43,144 @@ CandidateOutcome StrategyQpPlanner::solve_candidate(const Scenario& scene,
                                                     const expert::PlanLimits& limits,
                                                     const expert::PlanHints& hints,
                                                     expert::ExpertResult& result) const {
+  const auto start = Clock::now();
   result = fixed_.plan(scene, limits, {hints.path, &modes});
   CandidateOutcome out;
+  out.rounds = result.iterations();
   out.status = result.status;
   out.objective = result.objective;
   out.rescued = !result.rounds.empty() && std::isfinite(result.rounds.back().trust_radius);
   if (result.status == expert::PlanStatus::Converged) {
     out.collision = fixed_.to_trajectory(result, scene).collision;
   }
+  out.rounds_ms = ms_since(start);
   return out;
+}
+
+std::vector<StrategyQpPlanner::Candidate> StrategyQpPlanner::candidates_of(
+    const Scenario& scene, const expert::PlanHints& hints) const {
+  const LaneRule rule = effective_config(config_, scene).expert.lane_rule;
+  std::vector<Candidate> list;
+  // The last plan's modes (closed loop) come first: they were the optimum a
+  // step ago, and keep the manoeuvre steady.
+  const auto nodes = static_cast<std::size_t>(scene.steps) + 1;
+  if (hints.modes != nullptr && hints.modes->size() == nodes) list.push_back({{}, *hints.modes});
+  for (learn::Strategy& s : model_->predict(scene, config_.strategy_qp.candidates)) {
+    std::vector<int> modes = modes_of_strategy(s, scene.steps, rule);
+    // Two strategies may agree on this horizon: one solve is enough.
+    const bool seen = std::any_of(list.begin(), list.end(),
+                                  [&modes](const Candidate& c) { return c.modes == modes; });
+    if (!seen) list.push_back({std::move(s), std::move(modes)});
+  }
+  return list;
+}
+
+bool StrategyQpPlanner::take_candidate(CandidateOutcome& o, const std::vector<int>& modes,
+                                       expert::ExpertResult& plan, StrategyPlan& out,
+                                       std::vector<int>& rescued_hint) const {
+  o.rounds_run = true;
+  // Only plans of the plain rounds are followed: one the trust region
+  // rescued may have stopped in a box far from any fixed point (hundreds of
+  // times the optimum's cost in the study); its modes still make the best
+  // hint for the exact search.
+  if (o.feasible() && o.rescued && rescued_hint.empty()) rescued_hint = modes;
+  if (!o.feasible() || o.rescued) return false;
+  if (out.chosen >= 0 && o.objective >= out.result.objective) return false;
+  out.result = std::move(plan);
+  return true;
+}
+
+void StrategyQpPlanner::follow_in_order(const Scenario& scene, const expert::PlanLimits& limits,
+                                        const expert::PlanHints& hints,
+                                        const std::vector<Candidate>& list, bool stop_at_first,
+                                        StrategyPlan& out, std::vector<int>& rescued_hint) const {
+  expert::ExpertResult plan;
+  for (const Candidate& c : list) {
+    CandidateOutcome o = solve_candidate(scene, c.modes, limits, hints, plan);
+    o.strategy = c.strategy;
+    const bool taken = take_candidate(o, c.modes, plan, out, rescued_hint);
+    out.candidates.push_back(std::move(o));
+    if (!taken) continue;
+    out.chosen = static_cast<int>(out.candidates.size()) - 1;
+    if (stop_at_first) return;
+  }
+}
+
+void StrategyQpPlanner::follow_screened(const Scenario& scene, const expert::PlanLimits& limits,
+                                        const expert::PlanHints& hints,
+                                        const std::vector<Candidate>& list, StrategyPlan& out,
+                                        std::vector<int>& rescued_hint) const {
+  const auto start = Clock::now();
+  const expert::LinearizedRound first = fixed_.first_round(scene, hints);
+  const auto workspace = fixed_.solver().make_workspace();
+  std::vector<expert::LaneChangeSolution> screens;
+  std::vector<std::size_t> order;
+  for (const Candidate& c : list) {
+    screens.push_back(
+        fixed_.solver().solve(first.qp, {}, {workspace.get(), &c.modes, &first.point.controls}));
+    CandidateOutcome o;
+    o.strategy = c.strategy;
+    if (screens.back().status == expert::MiqpStatus::Optimal) {
+      o.screen_objective = screens.back().objective;
+      order.push_back(out.candidates.size());
+    } else {
+      // The rounds would stop at this very QP.
+      o.status = expert::PlanStatus::Infeasible;
+    }
+    out.candidates.push_back(std::move(o));
+  }
+  out.screen_ms = ms_since(start);
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+    return out.candidates[a].screen_objective < out.candidates[b].screen_objective;
+  });
+  expert::ExpertResult plan;
+  int held = 0;
+  for (std::size_t i : order) {
+    // The rounds go on from the screened solution: it is the first round's.
+    const expert::PlanHints from_screen{&screens[i].path, nullptr};
+    CandidateOutcome& o = out.candidates[i];
+    const std::string strategy = o.strategy;
+    const double screen_objective = o.screen_objective;
+    o = solve_candidate(scene, list[i].modes, limits, from_screen, plan);
+    o.strategy = strategy;
+    o.screen_objective = screen_objective;
+    if (take_candidate(o, list[i].modes, plan, out, rescued_hint)) out.chosen = static_cast<int>(i);
+    held += o.feasible() && !o.rescued ? 1 : 0;
+    if (held >= config_.strategy_qp.screen_keep) return;
+  }
 }
 
 StrategyPlan StrategyQpPlanner::plan(const Scenario& scene, const expert::PlanLimits& limits,
                                      const expert::PlanHints& hints) const {
   const auto start = Clock::now();
   StrategyPlan out;
-  const LaneRule rule = effective_config(config_, scene).expert.lane_rule;
-  std::vector<learn::Strategy> predicted = model_->predict(scene, config_.strategy_qp.candidates);
+  const std::vector<Candidate> list = candidates_of(scene, hints);
   out.predict_ms = ms_since(start);
-  // The last plan's modes (closed loop) come first: they were the optimum a
-  // step ago, and keep the manoeuvre steady.
-  std::vector<std::vector<int>> tried;
-  const auto nodes = static_cast<std::size_t>(scene.steps) + 1;
-  if (hints.modes != nullptr && hints.modes->size() == nodes) {
-    tried.push_back(*hints.modes);
-    predicted.insert(predicted.begin(), learn::Strategy());
-  }
-  for (std::size_t i = tried.size(); i < predicted.size(); ++i) {
-    tried.push_back(modes_of_strategy(predicted[i], scene.steps, rule));
-  }
-  expert::ExpertResult candidate;
   std::vector<int> rescued_hint;
-  for (std::size_t i = 0; i < tried.size(); ++i) {
-    // Two strategies may agree on this horizon: one solve is enough.
-    if (std::find(tried.begin(), tried.begin() + static_cast<std::ptrdiff_t>(i), tried[i]) !=
-        tried.begin() + static_cast<std::ptrdiff_t>(i)) {
-      continue;
-    }
-    CandidateOutcome o = solve_candidate(scene, tried[i], limits, hints, candidate);
-    o.strategy = predicted[i];
-    out.candidates.push_back(o);
-    // Only plans of the plain rounds are followed: one the trust region
-    // rescued may have stopped in a box far from any fixed point (hundreds
-    // of times the optimum's cost in the study); its modes still make the
-    // best hint for the exact search.
-    if (o.feasible() && o.rescued && rescued_hint.empty()) rescued_hint = tried[i];
-    if (!o.feasible() || o.rescued) continue;
-    if (out.chosen < 0 || o.objective < out.result.objective) {
-      out.chosen = static_cast<int>(out.candidates.size()) - 1;
-      out.result = std::move(candidate);
-      if (config_.strategy_qp.first_feasible) break;
-    }
+  if (config_.strategy_qp.screen) {
+    follow_screened(scene, limits, hints, list, out, rescued_hint);
+  } else {
+    follow_in_order(scene, limits, hints, list, config_.strategy_qp.first_feasible, out,
+                    rescued_hint);
   }
   if (out.chosen < 0) {
     // No candidate holds: the exact search, started from the likeliest modes.
-    if (rescued_hint.empty() && !tried.empty()) rescued_hint = tried.front();
+    if (rescued_hint.empty() && !list.empty()) rescued_hint = list.front().modes;
     out.result =
         exact_.plan(scene, limits, {hints.path, rescued_hint.empty() ? nullptr : &rescued_hint});
   }
   out.total_ms = ms_since(start);
   out.result.total_ms = out.total_ms;
   return out;
+}
+
+std::vector<CandidateOutcome> StrategyQpPlanner::assess(const Scenario& scene,
+                                                        const expert::PlanLimits& limits,
+                                                        const expert::PlanHints& hints) const {
+  StrategyPlan all;
+  std::vector<int> unused;
+  follow_in_order(scene, limits, hints, candidates_of(scene, hints), false, all, unused);
+  return all.candidates;
 }
 
 std::unique_ptr<PlannerSession> StrategyQpPlanner::start(const Scenario& /*scene*/) const {

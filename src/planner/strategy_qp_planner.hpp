@@ -1,11 +1,13 @@
 #pragma once
 // strategy-qp (docs/strategy.md): the learned lane strategy finished by the
 // exact structured QP. The strategy model ranks the integer parts (lane
-// modes per node) that plans of similar scenes took; each of the top k is
-// fixed and solved by the expert's successive linearization with one QP per
-// round and no search; the cheapest converged, collision-free one is
-// followed. Where none is, the exact search runs with the predictions as
-// hints, so the answer is then the expert's own.
+// modes per node) that plans of similar scenes took; a candidate is fixed and
+// solved by the expert's successive linearization with one QP per round and
+// no search. By default the candidates are first ranked by one QP each at
+// the first round's shared linearization, and the rounds run for them in
+// that order until one converges collision-free; that one is followed.
+// Where none does, the exact search runs with the predictions as hints, so
+// the answer is then the expert's own.
 #include <memory>
 #include <vector>
 
@@ -17,10 +19,16 @@ namespace lanechange::planner {
 /// How one candidate strategy fared.
 struct CandidateOutcome {
   learn::Strategy strategy;  ///< empty for the last plan's modes (closed loop)
+  /// Its QP at the first round's linearization (selection "screened"; infinite
+  /// when that QP has no solution, and then the status is Infeasible).
+  double screen_objective = expert::kInfinity;
+  bool rounds_run = false;  ///< false: an earlier candidate was followed first
   expert::PlanStatus status = expert::PlanStatus::SolverError;
   bool collision = false;
   bool rescued = false;  ///< converged in the trust region (expert.globalisation)
   double objective = expert::kInfinity;
+  int rounds = 0;          ///< QPs of its successive linearization
+  double rounds_ms = 0.0;  ///< their time, with the collision check
   [[nodiscard]] bool feasible() const {
     return status == expert::PlanStatus::Converged && !collision;
   }
@@ -31,6 +39,7 @@ struct StrategyPlan {
   std::vector<CandidateOutcome> candidates;  ///< in the model's order
   int chosen = -1;                           ///< index into candidates; -1: the exact search
   double predict_ms = 0.0;
+  double screen_ms = 0.0;  ///< the first round's QPs of every candidate
   double total_ms = 0.0;
 };
 
@@ -49,10 +58,37 @@ class StrategyQpPlanner final : public ClosedLoopPlanner {
   /// One plan of `scene`. Const and safe to call from many threads.
   [[nodiscard]] StrategyPlan plan(const Scenario& scene, const expert::PlanLimits& limits = {},
                                   const expert::PlanHints& hints = {}) const;
+  /// Every candidate of `plan`, each with its rounds run (none followed):
+  /// what the study counts as top-1 and top-k feasible.
+  [[nodiscard]] std::vector<CandidateOutcome> assess(const Scenario& scene,
+                                                     const expert::PlanLimits& limits = {},
+                                                     const expert::PlanHints& hints = {}) const;
   /// The exact expert it falls back on (config as this planner's).
   [[nodiscard]] const expert::ExpertPlanner& exact() const { return exact_; }
 
  private:
+  struct Candidate {
+    learn::Strategy strategy;
+    std::vector<int> modes;
+  };
+  /// The predicted strategies (after the last plan's modes, in closed loop),
+  /// each once on this horizon.
+  [[nodiscard]] std::vector<Candidate> candidates_of(const Scenario& scene,
+                                                     const expert::PlanHints& hints) const;
+  /// Runs the candidates' rounds in the list's order; follows the cheapest,
+  /// or the first that holds when `stop_at_first`.
+  void follow_in_order(const Scenario& scene, const expert::PlanLimits& limits,
+                       const expert::PlanHints& hints, const std::vector<Candidate>& list,
+                       bool stop_at_first, StrategyPlan& out, std::vector<int>& rescued_hint) const;
+  /// Ranks the candidates by one QP each on the first round's linearization,
+  /// then runs the rounds in that order and follows the first that holds.
+  void follow_screened(const Scenario& scene, const expert::PlanLimits& limits,
+                       const expert::PlanHints& hints, const std::vector<Candidate>& list,
+                       StrategyPlan& out, std::vector<int>& rescued_hint) const;
+  /// Records one candidate's rounds; true when the plan follows it.
+  bool take_candidate(CandidateOutcome& outcome, const std::vector<int>& modes,
+                      expert::ExpertResult& plan, StrategyPlan& out,
+                      std::vector<int>& rescued_hint) const;
   [[nodiscard]] CandidateOutcome solve_candidate(const Scenario& scene,
                                                  const std::vector<int>& modes,
                                                  const expert::PlanLimits& limits,

@@ -38,6 +38,8 @@ struct Tally {
   // Why the candidates of the scenes with an expert plan failed.
   std::map<std::string, long long> candidate_outcomes;
   std::vector<double> ratio, ratio_learned, strategy_ms, expert_ms, strategy_ms_learned;
+  std::vector<double> rounds_run;  // candidates whose rounds a plan ran
+  std::vector<double> screen_ms, predict_ms, followed_rounds, followed_ms;
 };
 
 void add_scene(const StrategyQpPlanner& planner, const Scenario& scene, Tally& t) {
@@ -49,16 +51,27 @@ void add_scene(const StrategyQpPlanner& planner, const Scenario& scene, Tally& t
   const bool expert_found = exact.status == expert::PlanStatus::Converged &&
                             !planner.exact().to_trajectory(exact, scene).collision;
   if (learned.chosen >= 0) t.strategy_ms_learned.push_back(learned.total_ms);
+  t.screen_ms.push_back(learned.screen_ms);
+  t.predict_ms.push_back(learned.predict_ms);
+  if (learned.chosen >= 0) {
+    const auto& followed = learned.candidates[static_cast<std::size_t>(learned.chosen)];
+    t.followed_rounds.push_back(followed.rounds);
+    t.followed_ms.push_back(followed.rounds_ms);
+  }
+  t.rounds_run.push_back(double(std::count_if(learned.candidates.begin(), learned.candidates.end(),
+                                              [](const auto& o) { return o.rounds_run; })));
   if (!expert_found) return;
   ++t.expert_plans;
-  for (const CandidateOutcome& c : learned.candidates) {
-    std::string what(expert::to_string(c.status));
-    if (c.status == expert::PlanStatus::Converged) {
-      what = c.collision ? "collision" : c.rescued ? "feasible_trust_region" : "feasible";
+  // Feasibility is the model's: every candidate's rounds, whatever the plan
+  // followed (the screen runs only as many as it needs).
+  const std::vector<CandidateOutcome> c = planner.assess(scene);
+  for (const CandidateOutcome& o : c) {
+    std::string what(expert::to_string(o.status));
+    if (o.status == expert::PlanStatus::Converged) {
+      what = o.collision ? "collision" : o.rescued ? "feasible_trust_region" : "feasible";
     }
     ++t.candidate_outcomes[what];
   }
-  const auto& c = learned.candidates;
   const bool first = !c.empty() && c.front().feasible();
   t.top1 += first ? 1 : 0;
   t.topk += std::any_of(c.begin(), c.end(), [](const auto& o) { return o.feasible(); }) ? 1 : 0;
@@ -96,6 +109,7 @@ json run_strategy_study(const StrategyStudyOptions& o) {
           {"seed", o.seed},
           {"scenes", t.scenes},
           {"candidates", o.config.strategy_qp.candidates},
+          {"screen", o.config.strategy_qp.screen},
           {"first_feasible", o.config.strategy_qp.first_feasible},
           {"expert_plans", t.expert_plans},
           {"top1_feasible", double(t.top1) / plans},
@@ -108,6 +122,11 @@ json run_strategy_study(const StrategyStudyOptions& o) {
           {"strategy_ms", summary(t.strategy_ms)},
           {"strategy_ms_without_fallback", summary(t.strategy_ms_learned)},
           {"expert_ms", summary(t.expert_ms)},
+          {"candidates_run_per_plan", summary(t.rounds_run)},
+          {"predict_ms", summary(t.predict_ms)},
+          {"screen_ms", summary(t.screen_ms)},
+          {"followed_rounds", summary(t.followed_rounds)},
+          {"followed_rounds_ms", summary(t.followed_ms)},
           {"speedup_of_medians", expert_median / strategy_median}};
 }
 
@@ -159,6 +178,11 @@ std::string strategy_study_markdown(const json& s) {
   row(out, "strategy-qp ms per plan", s.at("strategy_ms"));
   row(out, "strategy-qp ms per plan, no fallback", s.at("strategy_ms_without_fallback"));
   row(out, "exact expert ms per plan", s.at("expert_ms"));
+  row(out, "candidates whose rounds ran, per plan", s.at("candidates_run_per_plan"));
+  row(out, "strategy prediction ms", s.at("predict_ms"));
+  row(out, "screen ms (one QP per candidate)", s.at("screen_ms"));
+  row(out, "rounds of the candidate followed", s.at("followed_rounds"));
+  row(out, "its rounds' ms (with the collision check)", s.at("followed_rounds_ms"));
   return out;
 }
 

@@ -8,6 +8,7 @@
 #include <nlohmann/json.hpp>
 
 #include "../foundation/test_helpers.hpp"
+#include "expert/fast_solver_internal.hpp"
 #include "lanechange/audit.hpp"
 #include "lanechange/expert/crosscheck.hpp"
 #include "lanechange/expert/planner.hpp"
@@ -251,6 +252,42 @@ TEST(FastSolver, ReachableModesChangeNoAnswerAndSaveNodes) {
     }
   }
   EXPECT_LT(nodes_tightened, nodes_plain);
+}
+
+// The box test of a fixed mode sequence is bound tightening: it may refuse
+// only sequences whose QP has no solution, and it must catch some (those
+// whose switch the ego cannot reach) without an interior-point solve.
+TEST(FastSolver, TheModeBoxRefusesOnlyModesNoQpMeets) {
+  int refused = 0;
+  int infeasible = 0;
+  for (const LaneRule rule : {LaneRule::Footprint, LaneRule::EitherOr}) {
+    Config config;
+    config.expert.lane_rule = rule;
+    const ScenarioSampler sampler(config, 31);
+    for (std::uint64_t i = 0; i < 6; ++i) {
+      const LaneChangeQp qp = first_round_problem(sampler.sample(i), config);
+      detail::FastWorkspace ws;
+      for (int across = 0; across <= qp.steps; across += 7) {
+        for (const int width : {0, 6, 12}) {
+          std::vector<int> modes(static_cast<std::size_t>(qp.steps) + 1, detail::kFreeMode);
+          for (int k = 1; k <= qp.steps; ++k) {
+            LaneOccupancy o = k < across ? LaneOccupancy::EgoLane : LaneOccupancy::TargetLane;
+            if (k >= across && k < across + width) o = LaneOccupancy::BothLanes;
+            modes[static_cast<std::size_t>(k)] = lane_mode_index(rule, o);
+          }
+          if (rule == LaneRule::EitherOr && width > 0) continue;  // no "both" mode
+          detail::prepare_round(qp, {}, ws, false);
+          const bool solvable = detail::solve_node(qp, modes, ws).feasible;
+          const bool held = detail::modes_can_hold(qp, modes);
+          EXPECT_TRUE(held || !solvable) << "scene " << i << ", across at " << across;
+          refused += held ? 0 : 1;
+          infeasible += solvable ? 0 : 1;
+        }
+      }
+    }
+  }
+  EXPECT_GT(refused, 0);
+  EXPECT_LE(refused, infeasible);
 }
 
 void expect_audit_passes(const Trajectory& t, const Scenario& s, const Config& c) {

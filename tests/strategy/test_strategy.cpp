@@ -161,6 +161,71 @@ TEST(Strategy, AGoodPredictionIsFollowedWithTheExactCost) {
   EXPECT_NEAR(learned.result.objective, exact.objective, 0.01 * exact.objective);
 }
 
+TEST(Strategy, TheFirstRoundIsThePlansFirstRound) {
+  const Config config = testing::untimed_config();
+  const Scenario s = testing::open_road_scenario();
+  const ExpertPlanner expert(config, fast());
+  const ExpertResult plan = expert.plan(s);
+  ASSERT_EQ(plan.status, PlanStatus::Converged);
+  const expert::LinearizedRound first = expert.first_round(s);
+  const auto solution = expert.solver().solve(first.qp, {});
+  ASSERT_EQ(solution.status, expert::MiqpStatus::Optimal);
+  EXPECT_NEAR(solution.objective, plan.rounds.front().objective,
+              1e-6 * (1.0 + plan.rounds.front().objective));
+}
+
+TEST(Strategy, TheScreenRunsTheRoundsInTheOrderOfTheFirstQpsCost) {
+  Config config = testing::untimed_config();
+  const Scenario s = testing::open_road_scenario();
+  const planner::StrategyQpPlanner probe(config, model_of({s}, {"0"}));
+  const ExpertResult exact = probe.exact().plan(s);
+  ASSERT_EQ(exact.status, PlanStatus::Converged);
+  const learn::Strategy truth = learn::strategy_of(lane_modes_of(exact));
+  const std::vector<learn::Strategy> labels = {"2", "00000" + truth, truth, "0000000000" + truth};
+  const auto model = model_of({s, s, s, s}, labels);
+  ASSERT_TRUE(config.strategy_qp.screen);  // the default
+  config.strategy_qp.screen_keep = 1;      // the first candidate that holds is followed
+  const planner::StrategyPlan screened = planner::StrategyQpPlanner(config, model).plan(s);
+  ASSERT_GE(screened.chosen, 0);
+  const auto& chosen = screened.candidates[static_cast<std::size_t>(screened.chosen)];
+  int run = 0;
+  for (const auto& c : screened.candidates) {
+    if (c.strategy == "2") {  // starts in the target lane: no QP holds it
+      EXPECT_FALSE(std::isfinite(c.screen_objective));
+      EXPECT_EQ(c.status, PlanStatus::Infeasible);
+    }
+    run += c.rounds_run ? 1 : 0;
+    // Rounds ran only for candidates the screen ranked no worse than the one followed.
+    if (!c.rounds_run && std::isfinite(c.screen_objective)) {
+      EXPECT_GE(c.screen_objective, chosen.screen_objective);
+    }
+    if (c.rounds_run && &c != &chosen) {
+      EXPECT_FALSE(c.feasible() && !c.rescued);
+    }
+  }
+  EXPECT_GE(run, 1);
+  EXPECT_LT(run, static_cast<int>(screened.candidates.size()));
+  // Keeping two that hold costs no more than keeping one, and every
+  // candidate's rounds (MLOPT's cheapest of all) no more than either.
+  config.strategy_qp.screen_keep = 2;
+  const planner::StrategyPlan two = planner::StrategyQpPlanner(config, model).plan(s);
+  ASSERT_GE(two.chosen, 0);
+  EXPECT_LE(two.result.objective, screened.result.objective * (1.0 + 1e-9));
+  config.strategy_qp.screen = false;
+  const planner::StrategyQpPlanner all(config, model);
+  const planner::StrategyPlan cheapest = all.plan(s);
+  ASSERT_GE(cheapest.chosen, 0);
+  EXPECT_GE(two.result.objective, cheapest.result.objective * (1.0 - 1e-9));
+  EXPECT_NEAR(screened.result.objective, exact.objective, 0.05 * exact.objective);
+  // assess() runs every candidate, as the cheapest-of-all plan did.
+  const auto assessed = all.assess(s);
+  ASSERT_EQ(assessed.size(), cheapest.candidates.size());
+  for (std::size_t i = 0; i < assessed.size(); ++i) {
+    EXPECT_TRUE(assessed[i].rounds_run);
+    EXPECT_EQ(assessed[i].status, cheapest.candidates[i].status);
+  }
+}
+
 // The strategies of the expert's closed-loop plans of a scene, from its start.
 std::shared_ptr<const learn::StrategyModel> model_from_expert(const Scenario& s,
                                                               const Config& config) {

@@ -72,6 +72,12 @@ struct PlanHints {
 [[nodiscard]] Iterate warm_start(const Scenario& scenario, const Config& config,
                                  const TrafficPrediction& prediction);
 
+/// A round's MIQP and the point it is linearized about.
+struct LinearizedRound {
+  Iterate point;
+  LaneChangeQp qp;
+};
+
 class ExpertPlanner {
  public:
   /// `config` is the base; each scenario's own fields override it.
@@ -79,6 +85,13 @@ class ExpertPlanner {
 
   [[nodiscard]] ExpertResult plan(const Scenario& scenario, const PlanLimits& limits = {},
                                   const PlanHints& hints = {}) const;
+
+  /// The MIQP of `plan`'s first round, for the same scenario and hints: the
+  /// dynamics linearized about the hint's path (else the warm start), the
+  /// cars predicted along it. Every lane-mode sequence of that round shares
+  /// it, so strategy-qp ranks its candidates with one QP each on it.
+  [[nodiscard]] LinearizedRound first_round(const Scenario& scenario,
+                                            const PlanHints& hints = {}) const;
 
   /// The plan as a trajectory: the controls re-simulated through the
   /// (nonlinear) discrete model, the prediction, the label and the collision
