@@ -284,6 +284,9 @@ NodeOutcome solve_node(const LaneChangeQp& qp, const std::vector<int>& modes, Fa
                        double cutoff, bool coarse) {
   int iterations = 0;
   NodeOutcome out;
+  // Bound tightening refuses most infeasible nodes in microseconds, where the
+  // interior-point method takes its whole iteration limit to give up.
+  if (!modes_can_hold(qp, modes)) return out;
   for (;;) {
     out = solve_node_with(qp, modes, ws.needed_bounds, cutoff, coarse, ws);
     iterations += out.iterations;
