@@ -390,7 +390,10 @@ TEST(BonminSolver, StopsAtTheTimeLimit) {
     const BonminSolver solver(algorithm);
     const MiqpResult result = solver.solve(problem, settings);
     EXPECT_EQ(result.status, MiqpStatus::TimeLimit) << solver.name() << ": " << result.message;
-    EXPECT_LT(result.solve_ms, 5000.0) << solver.name();
+    // Stopped, not solved: far below the full solve's time, with room for a
+    // loaded machine under the sanitizers (a 2-core run sharing its cores with
+    // a build took 7.4 s; Bonmin checks its clock between nodes).
+    EXPECT_LT(result.solve_ms, 20000.0) << solver.name();
     if (result.has_solution()) {
       EXPECT_LE(problem.max_violation(result.x), 1e-7);
     }
