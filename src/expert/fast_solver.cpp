@@ -565,14 +565,7 @@ std::vector<int> rounded_modes(const LaneChangeQp& qp, const FastWorkspace& ws,
                                const Iterate& path) {
   std::vector<int> modes(qp.steps + 1, kFree);
   for (int k = 1; k <= qp.steps; ++k) {
-    double least = kInfinity;
-    for (int m = 0; m < static_cast<int>(qp.node_modes[k].size()); ++m) {
-      const double violation = mode_violation(qp.node_modes[k][m], path.states[k]);
-      if (ws.possible(k, m) && violation < least) {
-        least = violation;
-        modes[k] = m;
-      }
-    }
+    modes[k] = qp.best_mode(path, k, ws.possible_modes[static_cast<std::size_t>(k)]);
   }
   return modes;
 }

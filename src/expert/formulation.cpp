@@ -208,11 +208,12 @@ double mode_violation(const LaneMode& mode, const State& z) {
 
 }  // namespace
 
-int LaneChangeQp::best_mode(const Iterate& path, int node) const {
+int LaneChangeQp::best_mode(const Iterate& path, int node, unsigned allowed) const {
   const auto& modes = node_modes[node];
   int best = -1;
   double best_violation = kInfinity;
   for (int m = 0; m < static_cast<int>(modes.size()); ++m) {
+    if (((allowed >> m) & 1U) == 0) continue;
     const double v = mode_violation(modes[m], path.states[node]);
     if (v < best_violation) {
       best_violation = v;

@@ -81,8 +81,9 @@ struct LaneChangeQp {
   [[nodiscard]] double objective_constant() const;
   /// Largest violation of dynamics, bounds and lane logic (0 when feasible).
   [[nodiscard]] double max_violation(const Iterate& path) const;
-  /// The mode of node k that path satisfies best (smallest largest violation).
-  [[nodiscard]] int best_mode(const Iterate& path, int node) const;
+  /// The mode of node k that path satisfies best (smallest largest violation)
+  /// among those with their bit set in `allowed`; -1 if none is.
+  [[nodiscard]] int best_mode(const Iterate& path, int node, unsigned allowed = ~0U) const;
 };
 
 /// Where a lane rule puts `occupancy` among a node's modes (the index
