@@ -24,6 +24,7 @@ struct TrainArgs {
   bool no_plots = false;
   // DAgger (docs/strategy.md); off unless --dagger is given.
   dagger::DaggerOptions dagger;
+  std::string dagger_rollout = "network";
   CLI::Option* dagger_rounds = nullptr;
   std::vector<CLI::Option*> dagger_only;
 };
@@ -57,6 +58,7 @@ learn::TrainOptions train_options(const TrainArgs& a) {
 
 void run_dagger(const TrainArgs& a, const Config& config) {
   dagger::DaggerOptions o = a.dagger;
+  o.rollout = dagger::parse_rollout(a.dagger_rollout, "--dagger-rollout");
   o.train = train_options(a);
   o.config = config;
   o.jobs = a.jobs;
@@ -92,6 +94,9 @@ void add_dagger_options(CLI::App& cmd, TrainArgs& a) {
       cmd.add_option("--dagger-eval-seed", d.eval_seed, "Sampler seed of the held-out scenes"),
       cmd.add_flag("--dagger-every-scene", d.every_scene,
                    "Roll out also on scenes the classifier refuses (the first version)"),
+      cmd.add_option("--dagger-rollout", a.dagger_rollout,
+                     "Who drives the labelled rollouts: network (DAgger) or gated (mlp-miqp, "
+                     "labels up to the take-over: HG-DAgger)"),
       cmd.add_flag("--dagger-validate-all", d.validate_on_dagger,
                    "Early stopping of a retrain also on DAgger rows (the first version)")};
   for (CLI::Option* option : a.dagger_only) option->capture_default_str();

@@ -1,6 +1,6 @@
 // DAgger's data collection (docs/strategy.md, "DAgger"). The learner is the
-// bare action network: the states it visits without the take-over are the
-// ones it has to learn to leave, and classic DAgger rolls the learner out.
+// bare action network (classic DAgger rolls the learner out), or the network
+// under mlp-miqp's check, whose take-over ends the labels (HG-DAgger).
 #include "dagger/collect.hpp"
 
 #include <algorithm>
@@ -42,25 +42,38 @@ bool rolled_out(const Scenario& scene, const planner::MlpMiqpPlanner& learner,
 class LearnerSession final : public planner::PlannerSession {
  public:
   LearnerSession(const planner::MlpMiqpPlanner& learner, const Labelling& labelling,
-                 std::vector<Query>& sink)
-      : learner_(learner), labelling_(labelling), sink_(sink) {}
+                 std::vector<Query>& sink, std::unique_ptr<planner::PlannerSession> gate)
+      : learner_(learner), labelling_(labelling), sink_(sink), gate_(std::move(gate)) {}
 
   [[nodiscard]] planner::Decision act(const planner::Observation& o) override {
-    if (o.step % labelling_.stride == 0) {
-      // The call miqp's re-plan makes, from the scene as it is now, but
-      // without a warm start: the learner's path is not the expert's.
-      const Scenario now = planner::scene_now(o, learner_.config());
-      sink_.push_back(
-          first_nodes(data::detail::plan_outcome(learner_.expert(), now, labelling_.time_limit_s),
-                      o.t, labelling_.nodes));
+    if (!gate_) {
+      if (o.step % labelling_.stride == 0) label(o);
+      return {learner_.network(o), planner::ActStatus::Planned, ""};
     }
-    return {learner_.network(o), planner::ActStatus::Planned, ""};
+    planner::Decision d = gate_->act(o);
+    if (network_drives_) {
+      // The take-over's state is where the network went wrong: always labelled.
+      network_drives_ = d.status == planner::ActStatus::Planned;
+      if (!network_drives_ || o.step % labelling_.stride == 0) label(o);
+    }
+    return d;
   }
 
  private:
+  // The call miqp's re-plan makes, from the scene as it is now, but
+  // without a warm start: the learner's path is not the expert's.
+  void label(const planner::Observation& o) {
+    const Scenario now = planner::scene_now(o, learner_.config());
+    sink_.push_back(
+        first_nodes(data::detail::plan_outcome(learner_.expert(), now, labelling_.time_limit_s),
+                    o.t, labelling_.nodes));
+  }
+
   const planner::MlpMiqpPlanner& learner_;
   const Labelling& labelling_;
   std::vector<Query>& sink_;
+  std::unique_ptr<planner::PlannerSession> gate_;  ///< mlp-miqp's session when gated
+  bool network_drives_ = true;
 };
 
 class LearnerPlanner final : public planner::ClosedLoopPlanner {
@@ -70,8 +83,9 @@ class LearnerPlanner final : public planner::ClosedLoopPlanner {
       : learner_(learner), labelling_(labelling), sink_(sink) {}
   [[nodiscard]] std::string_view name() const override { return "dagger-learner"; }
   [[nodiscard]] std::unique_ptr<planner::PlannerSession> start(
-      const Scenario& /*scene*/) const override {
-    return std::make_unique<LearnerSession>(learner_, labelling_, sink_);
+      const Scenario& scene) const override {
+    return std::make_unique<LearnerSession>(learner_, labelling_, sink_,
+                                            labelling_.gated ? learner_.start(scene) : nullptr);
   }
 
  private:

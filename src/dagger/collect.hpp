@@ -27,9 +27,13 @@ struct Labelling {
   /// Roll out on scenes the classifier refuses too (the first version's
   /// behaviour); by default only where mlp-miqp would let the network drive.
   bool every_scene = false;
+  /// The learner drives with mlp-miqp's check, and the labels end at the
+  /// take-over (DaggerOptions::rollout).
+  bool gated = false;
 };
 
-/// Rolls the learner's network out on `scene` (no take-over) and asks
+/// Rolls the learner's network out on `scene` (with mlp-miqp's take-over
+/// when labelling.gated, when the labels stop) and asks
 /// `learner`'s expert for a plan at the states `labelling` names; no queries
 /// where the classifier refuses the scene, unless labelling.every_scene.
 [[nodiscard]] std::vector<Query> collect_scene(const Scenario& scene,

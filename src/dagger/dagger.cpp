@@ -24,6 +24,17 @@
 namespace lanechange::dagger {
 
 namespace fs = std::filesystem;
+
+std::string_view to_string(Rollout rollout) {
+  return rollout == Rollout::Gated ? "gated" : "network";
+}
+
+Rollout parse_rollout(std::string_view name, const char* field) {
+  if (name == "network") return Rollout::Network;
+  if (name == "gated") return Rollout::Gated;
+  throw InputError(field, "must be \"network\" or \"gated\", not \"" + std::string(name) + "\"");
+}
+
 using nlohmann::json;
 
 namespace {
@@ -74,6 +85,7 @@ json run_parameters(const DaggerOptions& o) {
           {"label_time_limit_s", o.label_time_limit_s},
           {"max_epochs", o.train.network.max_epochs},
           {"every_scene", o.every_scene},
+          {"rollout", to_string(o.rollout)},
           {"validate_on_dagger", o.validate_on_dagger},
           {"base_model", o.base_model},
           {"config", config}};
@@ -169,6 +181,7 @@ Aggregate read_aggregate(const DaggerOptions& o) {
                      "network visits; node 0 is the visited state"},
                     {"stride", o.stride},
                     {"label_nodes", o.label_nodes},
+                    {"rollout", to_string(o.rollout)},
                     {"scenes_per_round", o.scenes},
                     {"closed_loop_config", closed_loop},
                     {"shards", json::array()}}}};
@@ -192,10 +205,14 @@ void add_round(Aggregate& a, const DaggerOptions& o, int round, std::ostream* pr
                                         std::make_shared<expert::FastLaneChangeSolver>());
   fs::create_directories(data_dir(o));
   const detail::CollectJob job{
-      learner,      o.config,
-      o.scene_seed, (round - 1) * o.scenes,
-      o.scenes,     {o.stride, o.label_nodes, o.label_time_limit_s, o.every_scene},
-      o.jobs,       progress};
+      learner,
+      o.config,
+      o.scene_seed,
+      (round - 1) * o.scenes,
+      o.scenes,
+      {o.stride, o.label_nodes, o.label_time_limit_s, o.every_scene, o.rollout == Rollout::Gated},
+      o.jobs,
+      progress};
   const detail::RoundData got = detail::collect_round(job, data_dir(o), round - 1, a.count());
   a.shards.push_back(got.range);
   a.labelled.push_back(got.labelled);

@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -11,6 +12,7 @@
 #include "lanechange/learn/learn_data.hpp"
 #include "lanechange/learn/model.hpp"
 #include "lanechange/learn/train.hpp"
+#include "lanechange/sim/simulator.hpp"
 #include "test_helpers.hpp"
 
 namespace lanechange {
@@ -91,6 +93,41 @@ TEST(Dagger, KeptNodesFollowTheVisitedStateOnTheRolloutsClock) {
   EXPECT_EQ(b.controls[0].a, a.controls[0].a);
   for (int k = 0; k < 4; ++k) EXPECT_NEAR(b.t[k], (4 + k) * dt, 1e-9);
   EXPECT_GT(b.ego[3].x, b.ego[0].x);
+}
+
+// Gated (HG-DAgger), the learner is mlp-miqp: the labels are the bare
+// rollout's up to the take-over, plus the take-over's own state, and none
+// from the states the expert drives afterwards.
+TEST(Dagger, GatedLabelsEndAtTheTakeOver) {
+  const Config config = small_config();
+  const planner::MlpMiqpPlanner learner = constant_learner(config, {0.0, 0.05});
+  const Scenario scene = testing::open_road_scenario();
+  const sim::Rollout gated_run = sim::simulate(scene, learner, config);
+  const auto first_takeover = std::find_if(
+      gated_run.steps.begin(), gated_run.steps.end(),
+      [](const sim::StepRecord& r) { return r.status == planner::ActStatus::TookOver; });
+  ASSERT_NE(first_takeover, gated_run.steps.end()) << "the test needs a take-over";
+  const auto takeover_step = static_cast<int>(first_takeover - gated_run.steps.begin());
+  const int stride = 3;
+  const auto bare = dagger::detail::collect_scene(scene, learner, config, {stride, 1, 60.0});
+  const auto gated =
+      dagger::detail::collect_scene(scene, learner, config, {stride, 1, 60.0, false, true});
+  const int before = (takeover_step + stride - 1) / stride;  // stride steps before the take-over
+  ASSERT_EQ(static_cast<int>(gated.size()), before + 1);
+  ASSERT_LT(gated.size(), bare.size());
+  const double dt = scene.horizon / scene.steps;
+  for (std::size_t i = 0; i + 1 < gated.size(); ++i) {
+    const Trajectory& g = gated[i].outcome.trajectory;
+    const Trajectory& b = bare[i].outcome.trajectory;
+    ASSERT_EQ(g.nodes(), b.nodes());
+    if (g.nodes() == 0) continue;
+    EXPECT_EQ(g.ego[0].y, b.ego[0].y);
+    EXPECT_EQ(g.controls[0].a, b.controls[0].a);
+  }
+  const Trajectory& last = gated.back().outcome.trajectory;
+  if (last.nodes() > 0) {
+    EXPECT_NEAR(last.t[0], takeover_step * dt, 1e-9);
+  }
 }
 
 // mlp-miqp never lets the network drive a scene its classifier refuses, so
@@ -233,7 +270,8 @@ TEST_F(DaggerCli, BadOptionsAreRefusedAndWriteNothing) {
   for (const char* bad :
        {"--dagger -1", "--dagger 1 --dagger-scenes 0", "--dagger 1 --dagger-stride 0",
         "--dagger 1 --dagger-eval-seed 7001", "--dagger 1 --dagger-label-nodes -1",
-        "--dagger-scenes 5", "--dagger-every-scene", "--dagger-validate-all"}) {
+        "--dagger-scenes 5", "--dagger-every-scene", "--dagger-validate-all",
+        "--dagger 1 --dagger-rollout sideways", "--dagger-rollout gated"}) {
     std::string options = bad;
     options += " --dagger-dir ";
     options += work;

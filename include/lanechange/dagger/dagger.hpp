@@ -7,12 +7,28 @@
 #include <cstdint>
 #include <ostream>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "lanechange/config.hpp"
 #include "lanechange/learn/train.hpp"
 
 namespace lanechange::dagger {
+
+/// Who drives the rollouts that the expert labels.
+enum class Rollout {
+  /// The bare network to the scene's end (Ross et al.'s DAgger): it labels
+  /// states past the point where mlp-miqp's check would have taken over.
+  Network,
+  /// mlp-miqp itself (HG-DAgger, Kelly et al. 2019): the expert labels the
+  /// states the network drives through while its check passes, and the
+  /// state of the take-over; after it the expert drives its own states.
+  Gated,
+};
+
+[[nodiscard]] std::string_view to_string(Rollout rollout);
+/// "network" or "gated"; InputError naming `field` otherwise.
+[[nodiscard]] Rollout parse_rollout(std::string_view name, const char* field);
 
 struct DaggerOptions {
   /// The base model's training (data sets, seed, settings); its out_dir is
@@ -30,6 +46,7 @@ struct DaggerOptions {
   /// Roll the learner out on scenes the classifier refuses too (the first
   /// version's behaviour); by default only where mlp-miqp lets it drive.
   bool every_scene = false;
+  Rollout rollout = Rollout::Network;
   /// Early stopping of a retrain also on DAgger rows (the first version's
   /// behaviour); by default on the base's own validation rows only.
   bool validate_on_dagger = false;
