@@ -97,6 +97,8 @@ void add_dagger_options(CLI::App& cmd, TrainArgs& a) {
       cmd.add_option("--dagger-rollout", a.dagger_rollout,
                      "Who drives the labelled rollouts: network (DAgger) or gated (mlp-miqp, "
                      "labels up to the take-over: HG-DAgger)"),
+      cmd.add_option("--dagger-past-takeover", d.past_takeover_s,
+                     "Gated: seconds the network drives on past the take-over, labelled"),
       cmd.add_flag("--dagger-validate-all", d.validate_on_dagger,
                    "Early stopping of a retrain also on DAgger rows (the first version)")};
   for (CLI::Option* option : a.dagger_only) option->capture_default_str();

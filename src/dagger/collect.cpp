@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cmath>
 #include <thread>
 
 #include "lanechange/data/progress.hpp"
@@ -48,20 +49,40 @@ class LearnerSession final : public planner::PlannerSession {
   [[nodiscard]] planner::Decision act(const planner::Observation& o) override {
     if (!gate_) {
       if (o.step % labelling_.stride == 0) label(o);
-      return {learner_.network(o), planner::ActStatus::Planned, ""};
+      return network_decision(o);
     }
-    planner::Decision d = gate_->act(o);
-    if (network_drives_) {
+    if (takeover_step_ < 0) {
+      planner::Decision d = gate_->act(o);
+      if (d.status == planner::ActStatus::Planned) {
+        if (o.step % labelling_.stride == 0) label(o);
+        return d;
+      }
       // The take-over's state is where the network went wrong: always labelled.
-      network_drives_ = d.status == planner::ActStatus::Planned;
-      if (!network_drives_ || o.step % labelling_.stride == 0) label(o);
+      takeover_step_ = o.step;
+      label(o);
+      if (labelling_.past_takeover_s <= 0.0) return d;
+    } else if (const int past = o.step - takeover_step_;
+               past <= past_takeover_steps(o) && past % labelling_.stride == 0) {
+      label(o);
     }
-    return d;
+    // Past the take-over the network drives on into the states its check
+    // foresaw, the ones its own look-ahead has to learn to avoid; after
+    // them nothing is labelled, and the network is the cheapest driver.
+    return network_decision(o);
   }
 
  private:
   // The call miqp's re-plan makes, from the scene as it is now, but
   // without a warm start: the learner's path is not the expert's.
+  [[nodiscard]] planner::Decision network_decision(const planner::Observation& o) const {
+    return {learner_.network(o), planner::ActStatus::Planned, ""};
+  }
+
+  [[nodiscard]] int past_takeover_steps(const planner::Observation& o) const {
+    const double dt = o.scene->horizon / o.scene->steps;
+    return static_cast<int>(std::lround(labelling_.past_takeover_s / dt));
+  }
+
   void label(const planner::Observation& o) {
     const Scenario now = planner::scene_now(o, learner_.config());
     sink_.push_back(
@@ -73,7 +94,7 @@ class LearnerSession final : public planner::PlannerSession {
   const Labelling& labelling_;
   std::vector<Query>& sink_;
   std::unique_ptr<planner::PlannerSession> gate_;  ///< mlp-miqp's session when gated
-  bool network_drives_ = true;
+  int takeover_step_ = -1;                         ///< the gate's first take-over; -1: none yet
 };
 
 class LearnerPlanner final : public planner::ClosedLoopPlanner {

@@ -30,6 +30,9 @@ struct Labelling {
   /// The learner drives with mlp-miqp's check, and the labels end at the
   /// take-over (DaggerOptions::rollout).
   bool gated = false;
+  /// When gated: seconds past the take-over in which the network drives on
+  /// and its states are labelled (0: the labels end at the take-over).
+  double past_takeover_s = 0.0;
 };
 
 /// Rolls the learner's network out on `scene` (with mlp-miqp's take-over

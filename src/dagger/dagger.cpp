@@ -54,6 +54,10 @@ void validate(const DaggerOptions& o) {
   require(o.scenes >= 1, "--dagger-scenes", "must be at least 1");
   require(o.stride >= 1, "--dagger-stride", "must be at least 1");
   require(o.label_nodes >= 0, "--dagger-label-nodes", "must be at least 0 (0: whole plans)");
+  require(o.past_takeover_s >= 0.0 && o.past_takeover_s <= 60.0, "--dagger-past-takeover",
+          "must be in [0, 60] s");
+  require(o.past_takeover_s == 0.0 || o.rollout == Rollout::Gated, "--dagger-past-takeover",
+          "only goes with --dagger-rollout gated");
   require(o.eval_count >= 1, "--dagger-eval-count", "must be at least 1");
   require(o.eval_seed != o.scene_seed, "--dagger-eval-seed",
           "must differ from --dagger-seed: the evaluation scenes must be held out");
@@ -86,6 +90,7 @@ json run_parameters(const DaggerOptions& o) {
           {"max_epochs", o.train.network.max_epochs},
           {"every_scene", o.every_scene},
           {"rollout", to_string(o.rollout)},
+          {"past_takeover_s", o.past_takeover_s},
           {"validate_on_dagger", o.validate_on_dagger},
           {"base_model", o.base_model},
           {"config", config}};
@@ -182,6 +187,7 @@ Aggregate read_aggregate(const DaggerOptions& o) {
                     {"stride", o.stride},
                     {"label_nodes", o.label_nodes},
                     {"rollout", to_string(o.rollout)},
+                    {"past_takeover_s", o.past_takeover_s},
                     {"scenes_per_round", o.scenes},
                     {"closed_loop_config", closed_loop},
                     {"shards", json::array()}}}};

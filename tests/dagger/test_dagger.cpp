@@ -130,6 +130,31 @@ TEST(Dagger, GatedLabelsEndAtTheTakeOver) {
   }
 }
 
+// With time past the take-over, the network drives on into the states its
+// check foresaw and those are labelled too: at stride 1 the labels are the
+// bare rollout's, cut that many steps after the take-over.
+TEST(Dagger, GatedLabelsGoOnPastTheTakeOverForTheGivenTime) {
+  const Config config = small_config();
+  const planner::MlpMiqpPlanner learner = constant_learner(config, {0.0, 0.05});
+  const Scenario scene = testing::open_road_scenario();
+  const double dt = scene.horizon / scene.steps;
+  const int past_steps = 4;
+  const auto bare = dagger::detail::collect_scene(scene, learner, config, {1, 1, 60.0});
+  const auto at = dagger::detail::collect_scene(scene, learner, config, {1, 1, 60.0, false, true});
+  const auto past = dagger::detail::collect_scene(scene, learner, config,
+                                                  {1, 1, 60.0, false, true, past_steps * dt});
+  ASSERT_EQ(past.size(), at.size() + past_steps);
+  ASSERT_LT(past.size(), bare.size());
+  for (std::size_t i = 0; i < past.size(); ++i) {
+    const Trajectory& p = past[i].outcome.trajectory;
+    const Trajectory& b = bare[i].outcome.trajectory;
+    ASSERT_EQ(p.nodes(), b.nodes()) << i;
+    if (p.nodes() == 0) continue;
+    EXPECT_EQ(p.t[0], b.t[0]);
+    EXPECT_EQ(p.ego[0].y, b.ego[0].y);
+  }
+}
+
 // mlp-miqp never lets the network drive a scene its classifier refuses, so
 // by default neither does DAgger; every_scene restores the first version.
 TEST(Dagger, ScenesTheClassifierRefusesAreNotRolledOut) {
@@ -271,7 +296,10 @@ TEST_F(DaggerCli, BadOptionsAreRefusedAndWriteNothing) {
        {"--dagger -1", "--dagger 1 --dagger-scenes 0", "--dagger 1 --dagger-stride 0",
         "--dagger 1 --dagger-eval-seed 7001", "--dagger 1 --dagger-label-nodes -1",
         "--dagger-scenes 5", "--dagger-every-scene", "--dagger-validate-all",
-        "--dagger 1 --dagger-rollout sideways", "--dagger-rollout gated"}) {
+        "--dagger 1 --dagger-rollout sideways", "--dagger-rollout gated",
+        "--dagger 1 --dagger-past-takeover 1",
+        "--dagger 1 --dagger-rollout gated "
+        "--dagger-past-takeover -1"}) {
     std::string options = bad;
     options += " --dagger-dir ";
     options += work;

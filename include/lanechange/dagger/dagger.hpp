@@ -47,6 +47,9 @@ struct DaggerOptions {
   /// version's behaviour); by default only where mlp-miqp lets it drive.
   bool every_scene = false;
   Rollout rollout = Rollout::Network;
+  /// Gated only: seconds past the take-over in which the network drives on
+  /// (the states its check foresaw) and is labelled; 0: none.
+  double past_takeover_s = 0.0;
   /// Early stopping of a retrain also on DAgger rows (the first version's
   /// behaviour); by default on the base's own validation rows only.
   bool validate_on_dagger = false;
