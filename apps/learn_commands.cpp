@@ -98,7 +98,9 @@ void add_dagger_options(CLI::App& cmd, TrainArgs& a) {
                      "Who drives the labelled rollouts: network (DAgger) or gated (mlp-miqp, "
                      "labels up to the take-over: HG-DAgger)"),
       cmd.add_option("--dagger-past-takeover", d.past_takeover_s,
-                     "Gated: seconds the network drives on past the take-over, labelled"),
+                     "Gated: seconds of the expert's recovery after the take-over, labelled"),
+      cmd.add_flag("--dagger-fine-tune", d.fine_tune,
+                   "Each retrain starts from the last round's network and its standardizers"),
       cmd.add_flag("--dagger-validate-all", d.validate_on_dagger,
                    "Early stopping of a retrain also on DAgger rows (the first version)")};
   for (CLI::Option* option : a.dagger_only) option->capture_default_str();

@@ -60,15 +60,14 @@ class LearnerSession final : public planner::PlannerSession {
       // The take-over's state is where the network went wrong: always labelled.
       takeover_step_ = o.step;
       label(o);
-      if (labelling_.past_takeover_s <= 0.0) return d;
-    } else if (const int past = o.step - takeover_step_;
-               past <= past_takeover_steps(o) && past % labelling_.stride == 0) {
-      label(o);
+      return d;
     }
-    // Past the take-over the network drives on into the states its check
-    // foresaw, the ones its own look-ahead has to learn to avoid; after
-    // them nothing is labelled, and the network is the cheapest driver.
-    return network_decision(o);
+    const int past = o.step - takeover_step_;
+    // Nothing is labelled any more: the cheapest driver ends the rollout.
+    if (past > past_takeover_steps(o)) return network_decision(o);
+    // HG-DAgger labels the expert's recovery from where the network left it.
+    if (past % labelling_.stride == 0) label(o);
+    return gate_->act(o);
   }
 
  private:

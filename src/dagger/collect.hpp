@@ -30,8 +30,8 @@ struct Labelling {
   /// The learner drives with mlp-miqp's check, and the labels end at the
   /// take-over (DaggerOptions::rollout).
   bool gated = false;
-  /// When gated: seconds past the take-over in which the network drives on
-  /// and its states are labelled (0: the labels end at the take-over).
+  /// When gated: seconds past the take-over in which the expert's recovery
+  /// is labelled too (HG-DAgger); 0: the labels end at the take-over.
   double past_takeover_s = 0.0;
 };
 

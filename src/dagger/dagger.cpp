@@ -91,6 +91,7 @@ json run_parameters(const DaggerOptions& o) {
           {"every_scene", o.every_scene},
           {"rollout", to_string(o.rollout)},
           {"past_takeover_s", o.past_takeover_s},
+          {"fine_tune", o.fine_tune},
           {"validate_on_dagger", o.validate_on_dagger},
           {"base_model", o.base_model},
           {"config", config}};
@@ -210,15 +211,15 @@ void add_round(Aggregate& a, const DaggerOptions& o, int round, std::ostream* pr
   const planner::MlpMiqpPlanner learner(o.config, model,
                                         std::make_shared<expert::FastLaneChangeSolver>());
   fs::create_directories(data_dir(o));
-  const detail::CollectJob job{
-      learner,
-      o.config,
-      o.scene_seed,
-      (round - 1) * o.scenes,
-      o.scenes,
-      {o.stride, o.label_nodes, o.label_time_limit_s, o.every_scene, o.rollout == Rollout::Gated},
-      o.jobs,
-      progress};
+  const detail::CollectJob job{learner,
+                               o.config,
+                               o.scene_seed,
+                               (round - 1) * o.scenes,
+                               o.scenes,
+                               {o.stride, o.label_nodes, o.label_time_limit_s, o.every_scene,
+                                o.rollout == Rollout::Gated, o.past_takeover_s},
+                               o.jobs,
+                               progress};
   const detail::RoundData got = detail::collect_round(job, data_dir(o), round - 1, a.count());
   a.shards.push_back(got.range);
   a.labelled.push_back(got.labelled);
@@ -382,6 +383,7 @@ DaggerReport run(const DaggerOptions& options, std::ostream* progress) {
       retrain.plots = options.train.plots;
       retrain.progress = options.train.progress;
       retrain.validate_on_added = options.validate_on_dagger;
+      if (options.fine_tune) retrain.warm_start = model_dir(options, r - 1);
       retrain.note = {{"dagger_round", r}, {"data", data_dir(options)}};
       (void)learn::retrain_network(retrain);
     }

@@ -8,6 +8,7 @@
 #include <cstdlib>
 #include <random>
 
+#include "lanechange/error.hpp"
 #include "lanechange/learn/learn_data.hpp"
 
 namespace lanechange::learn {
@@ -109,14 +110,23 @@ void TrainedNetwork::save(const std::string& path) const { dlib::serialize(path)
 
 TrainedNetwork train_network(const Eigen::MatrixXd& x, const Eigen::MatrixXd& y,
                              const std::vector<int>& train, const std::vector<int>& validation,
-                             const NetworkSettings& s, std::ostream* progress) {
+                             const NetworkSettings& s, std::ostream* progress,
+                             const std::string& warm_start) {
   const auto start = std::chrono::steady_clock::now();
   TrainedNetwork result;
   Net net;
-  // dlib draws its initial weights from std::rand when a layer is set up;
-  // seeding it and setting up here (one forward pass) makes runs repeatable.
-  std::srand(static_cast<unsigned>(s.seed));
-  (void)net(row_of(x, 0));
+  if (warm_start.empty()) {
+    // dlib draws its initial weights from std::rand when a layer is set up;
+    // seeding it and setting up here (one forward pass) makes runs repeatable.
+    std::srand(static_cast<unsigned>(s.seed));
+    (void)net(row_of(x, 0));
+  } else {
+    try {
+      dlib::deserialize(warm_start) >> net;
+    } catch (const dlib::serialization_error& e) {
+      throw InputError(warm_start, std::string("not a network of this model's shape: ") + e.what());
+    }
+  }
   dlib::dnn_trainer<Net, dlib::adam> trainer(net, dlib::adam(0.0, 0.9, 0.999));
   trainer.set_learning_rate(s.learning_rate);
   trainer.set_learning_rate_shrink_factor(1.0);  // our early stopping decides instead

@@ -80,6 +80,7 @@ struct Context {
   json model;    // model.json in the making
   json metrics;
   std::vector<char> validation_pool;  // rows that may validate; empty: every one
+  std::string warm_start;             // model directory to start the network from; empty: none
 
   void say(const std::string& line) const {
     if (options.progress != nullptr) *options.progress << "train: " << line << std::endl;
@@ -225,6 +226,20 @@ std::vector<char> validation_scenarios(const Context& c) {
   return mask_of(rows, c.data.scenarios.rows());
 }
 
+// A warm start keeps the standardizers its network was trained under: the
+// same weights mean something else under new ones.
+std::pair<Standardizer, Standardizer> network_standardizers(const Context& c,
+                                                            const Eigen::MatrixXd& fit_in,
+                                                            const Eigen::MatrixXd& fit_out) {
+  if (c.warm_start.empty()) return {Standardizer::fit(fit_in), Standardizer::fit(fit_out)};
+  const PolicyWeights w = PolicyWeights::from_json(
+      lanechange::detail::read_json_file((fs::path(c.warm_start) / "policy.json").string()));
+  if (w.inputs != c.data.action_inputs || w.outputs != c.data.action_targets) {
+    throw InputError(c.warm_start, "its network has other inputs or outputs than the data's");
+  }
+  return {Standardizer{w.input_mean, w.input_scale}, Standardizer{w.output_mean, w.output_scale}};
+}
+
 void train_action_network(Context& c) {
   const SampleTable& s = c.data.samples;
   const int n = c.data.scenarios.rows();
@@ -242,13 +257,16 @@ void train_action_network(Context& c) {
     fit_in.row(static_cast<Eigen::Index>(i)) = s.inputs.row(fit[i]);
     fit_out.row(static_cast<Eigen::Index>(i)) = s.targets.row(fit[i]);
   }
-  const Standardizer in_norm = Standardizer::fit(fit_in), out_norm = Standardizer::fit(fit_out);
+  const auto [in_norm, out_norm] = network_standardizers(c, fit_in, fit_out);
   NetworkSettings settings = c.options.network;
   settings.seed = c.seeds.network;
   c.say("action network: " + std::to_string(fit.size()) + " training rows, " +
-        std::to_string(validation.size()) + " validation rows");
+        std::to_string(validation.size()) + " validation rows" +
+        (c.warm_start.empty() ? std::string() : ", from the network of " + c.warm_start));
+  const std::string warm_file =
+      c.warm_start.empty() ? "" : (fs::path(c.warm_start) / "network.dlib").string();
   const TrainedNetwork net = train_network(in_norm.apply(s.inputs), out_norm.apply(s.targets), fit,
-                                           validation, settings, c.options.progress);
+                                           validation, settings, c.options.progress, warm_file);
   PolicyWeights w{c.data.action_inputs, c.data.action_targets, in_norm.mean, in_norm.scale,
                   out_norm.mean,        out_norm.scale,        {},           {}};
   net.export_layers(w.weights, w.biases);
@@ -404,7 +422,8 @@ TrainReport train_models(const TrainOptions& options) {
   const Split split = split_scenarios(data.scenarios.rows(), options.test_share, options.seed);
   const auto [out, staging] = staging_for(options.out_dir);
   fs::create_directories(staging);
-  Context c{options, data, split, Seeds(options.seed), staging, json::object(), json::object(), {}};
+  Context c{options,        data, split, Seeds(options.seed), staging, json::object(),
+            json::object(), {},   {}};
   return build_and_publish(c, out, start, [&] {
     c.say("read " + std::to_string(data.scenarios.rows()) + " scenarios and " +
           std::to_string(data.samples.rows()) + " well-posed samples from " +
@@ -480,12 +499,15 @@ TrainReport retrain_network(const RetrainOptions& options) {
   // The base's own validation rows, in the same order, give the same inner
   // split as the base's: early stopping is then like for like.
   std::vector<char> pool = options.validate_on_added ? std::vector<char>{} : split.base_rows;
-  Context c{train, data, split.split, Seeds(train.seed), staging, base, metrics, std::move(pool)};
+  Context c{train, data,    split.split,     Seeds(train.seed), staging,
+            base,  metrics, std::move(pool), options.warm_start};
   return build_and_publish(c, out, start, [&] {
     fs::copy(options.base_model, staging, fs::copy_options::recursive);
     train_action_network(c);
     c.model["data"] = describe_data(c);
-    c.model["retrained_network"] = {{"base_model", options.base_model}, {"note", options.note}};
+    c.model["retrained_network"] = {{"base_model", options.base_model},
+                                    {"warm_start", options.warm_start},
+                                    {"note", options.note}};
     c.metrics["data"]["samples_network"] = data.samples.rows();
     c.metrics["network"]["validation"] = options.validate_on_added ? "all data sets" : "base's";
     c.metrics["wall_s_retrain"] = seconds_since(start);

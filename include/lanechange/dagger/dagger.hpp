@@ -20,9 +20,9 @@ enum class Rollout {
   /// The bare network to the scene's end (Ross et al.'s DAgger): it labels
   /// states past the point where mlp-miqp's check would have taken over.
   Network,
-  /// mlp-miqp itself (HG-DAgger, Kelly et al. 2019): the expert labels the
-  /// states the network drives through while its check passes, and the
-  /// state of the take-over; after it the expert drives its own states.
+  /// mlp-miqp itself (after HG-DAgger, Kelly et al. 2019): the expert labels
+  /// the states the network drives through while its check passes and the
+  /// state of the take-over (and past_takeover_s of its recovery).
   Gated,
 };
 
@@ -47,9 +47,13 @@ struct DaggerOptions {
   /// version's behaviour); by default only where mlp-miqp lets it drive.
   bool every_scene = false;
   Rollout rollout = Rollout::Network;
-  /// Gated only: seconds past the take-over in which the network drives on
-  /// (the states its check foresaw) and is labelled; 0: none.
+  /// Gated only: seconds past the take-over in which the states the expert
+  /// drives through (its recovery from the network's state) are labelled
+  /// too, as HG-DAgger does; 0: the labels end at the take-over.
   double past_takeover_s = 0.0;
+  /// Each round's retrain starts from the last round's network and keeps
+  /// round 0's standardizers, instead of fresh weights on refitted ones.
+  bool fine_tune = false;
   /// Early stopping of a retrain also on DAgger rows (the first version's
   /// behaviour); by default on the base's own validation rows only.
   bool validate_on_dagger = false;

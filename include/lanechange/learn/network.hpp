@@ -58,6 +58,7 @@ class TrainedNetwork {
                                            const std::vector<int>& train,
                                            const std::vector<int>& validation,
                                            const NetworkSettings& settings,
-                                           std::ostream* progress = nullptr);
+                                           std::ostream* progress = nullptr,
+                                           const std::string& warm_start = "");
 
 }  // namespace lanechange::learn

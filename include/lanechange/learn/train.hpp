@@ -55,6 +55,10 @@ struct RetrainOptions {
   /// Draw validation rows from the other data sets too (DAgger's first
   /// version): their rows then stop the training early, unlike the base's.
   bool validate_on_added = false;
+  /// A model directory whose network the retrain starts from, keeping its
+  /// standardizers (DAgger's rounds fine-tune the last round's network);
+  /// empty: fresh weights and standardizers fitted on all training rows.
+  std::string warm_start;
   bool plots = true;
   std::ostream* progress = nullptr;
   nlohmann::json note;  ///< recorded in model.json ("retrained_network")
