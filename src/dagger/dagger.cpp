@@ -7,6 +7,7 @@
 
 #include <unistd.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -17,6 +18,7 @@
 #include "lanechange/error.hpp"
 #include "lanechange/expert/lane_change_solver.hpp"
 #include "lanechange/learn/model.hpp"
+#include "lanechange/sampler.hpp"
 #include "lanechange/sim/evaluate.hpp"
 #include "planner/mlp_miqp_planner.hpp"
 #include "sim/evaluation_files.hpp"
@@ -115,14 +117,23 @@ void prepare_work_dir(const DaggerOptions& o) {
   lanechange::detail::write_file_atomically(file.string(), parameters.dump(2) + "\n");
 }
 
-RoundRow score(const std::string& rollouts_csv, const std::string& planner, int round) {
+// driven[i]: whether the classifier lets the network drive held-out scene i
+// (empty for the reference planner).
+RoundRow score(const std::string& rollouts_csv, const std::string& planner, int round,
+               const std::vector<char>& driven) {
   const std::vector<sim::RolloutRow> all = sim::read_rollouts(rollouts_csv);
   std::vector<const sim::RolloutRow*> mine;
+  RoundRow row;
   for (const sim::RolloutRow& r : all) {
-    if (r.planner == planner) mine.push_back(&r);
+    if (r.planner != planner) continue;
+    mine.push_back(&r);
+    const auto i = static_cast<std::size_t>(r.index);
+    if (i >= driven.size() || driven[i] == 0) continue;
+    ++row.driven;
+    if (std::isnan(r.first_takeover_t)) continue;
+    ++(r.first_takeover_t == 0.0 ? row.taken_over_at_start : row.taken_over_later);
   }
   const sim::RolloutRates rates = sim::rates_of(mine);
-  RoundRow row;
   row.round = round;
   row.planner = planner;
   row.rollouts = rates.rollouts;
@@ -133,9 +144,24 @@ RoundRow score(const std::string& rollouts_csv, const std::string& planner, int 
   return row;
 }
 
+// Which held-out scenes round 0's classifier lets the network drive; the
+// rounds share it, as they share its classifiers.
+std::vector<char> driven_scenes(const DaggerOptions& o) {
+  const auto model = std::make_shared<const learn::Model>(learn::Model::load(model_dir(o, 0)));
+  const planner::MlpMiqpPlanner learner(o.config, model,
+                                        std::make_shared<expert::FastLaneChangeSolver>());
+  const ScenarioSampler sampler(o.config, o.eval_seed);
+  std::vector<char> driven(static_cast<std::size_t>(o.eval_count));
+  for (std::size_t i = 0; i < driven.size(); ++i) {
+    driven[i] = learner.tries(sampler.sample(static_cast<std::uint64_t>(i))) ? 1 : 0;
+  }
+  return driven;
+}
+
 // The held-out evaluation of one planner; evaluate resumes on its own.
 RoundRow evaluate(const DaggerOptions& o, const std::string& planner, const std::string& model,
-                  const std::string& name, int round, std::ostream* progress) {
+                  const std::string& name, int round, const std::vector<char>& driven,
+                  std::ostream* progress) {
   sim::EvaluateOptions e;
   e.count = o.eval_count;
   e.seed = o.eval_seed;
@@ -147,7 +173,7 @@ RoundRow evaluate(const DaggerOptions& o, const std::string& planner, const std:
   run.jobs = o.jobs;
   run.progress = progress;
   (void)sim::evaluate(e, run);
-  RoundRow row = score((fs::path(e.out_dir) / "rollouts.csv").string(), planner, round);
+  RoundRow row = score((fs::path(e.out_dir) / "rollouts.csv").string(), planner, round, driven);
   if (progress != nullptr) {
     *progress << "dagger: "
               << (round < 0 ? std::string("reference") : "round " + std::to_string(round)) << ", "
@@ -268,6 +294,9 @@ void write_tables(const DaggerOptions& o, const DaggerReport& report) {
                                             std::to_string(r.takeovers_per_rollout),
                                             std::to_string(r.collision_rate),
                                             std::to_string(r.at_fault_collision_rate),
+                                            std::to_string(r.driven),
+                                            std::to_string(r.taken_over_at_start),
+                                            std::to_string(r.taken_over_later),
                                             std::to_string(r.labels),
                                             std::to_string(r.dagger_samples)};
     for (std::size_t i = 0; i < cells.size(); ++i) {
@@ -291,6 +320,9 @@ std::vector<std::string> table_columns() {
           "takeovers_per_rollout",
           "collision_rate",
           "at_fault_collision_rate",
+          "driven",
+          "taken_over_at_start",
+          "taken_over_later",
           "labels",
           "dagger_samples"};
 }
@@ -298,17 +330,20 @@ std::vector<std::string> table_columns() {
 std::string markdown_table(const DaggerReport& report) {
   std::string md =
       "| round | planner | rollouts | success | take-overs per rollout | collisions | at-fault "
-      "collisions | new well-posed labels | DAgger samples so far |\n"
-      "|---|---|---|---|---|---|---|---|---|\n";
+      "collisions | network drives | taken over at the start | taken over later | new "
+      "well-posed labels | DAgger samples so far |\n"
+      "|---|---|---|---|---|---|---|---|---|---|---|---|\n";
   std::vector<RoundRow> rows = report.rounds;
   rows.push_back(report.expert);
   char line[256];
   for (const RoundRow& r : rows) {
     std::snprintf(
-        line, sizeof line, "| %s | %s | %lld | %.1f%% | %.2f | %.1f%% | %.1f%% | %lld | %lld |\n",
+        line, sizeof line,
+        "| %s | %s | %lld | %.1f%% | %.2f | %.1f%% | %.1f%% | %lld | %lld | %lld | %lld | %lld |\n",
         r.round < 0 ? "-" : std::to_string(r.round).c_str(), r.planner.c_str(), r.rollouts,
         100.0 * r.success_rate, r.takeovers_per_rollout, 100.0 * r.collision_rate,
-        100.0 * r.at_fault_collision_rate, r.labels, r.dagger_samples);
+        100.0 * r.at_fault_collision_rate, r.driven, r.taken_over_at_start, r.taken_over_later,
+        r.labels, r.dagger_samples);
     md += line;
   }
   return md;
@@ -332,7 +367,7 @@ DaggerReport read_report(const std::string& work_dir) {
     RoundRow r;
     std::string round;
     std::string rollouts;
-    std::vector<std::string> rest(6);
+    std::vector<std::string> rest(9);
     std::getline(cells, round, ',');
     std::getline(cells, r.planner, ',');
     std::getline(cells, rollouts, ',');
@@ -344,8 +379,11 @@ DaggerReport read_report(const std::string& work_dir) {
       r.takeovers_per_rollout = std::stod(rest[1]);
       r.collision_rate = std::stod(rest[2]);
       r.at_fault_collision_rate = std::stod(rest[3]);
-      r.labels = std::stoll(rest[4]);
-      r.dagger_samples = std::stoll(rest[5]);
+      r.driven = std::stoll(rest[4]);
+      r.taken_over_at_start = std::stoll(rest[5]);
+      r.taken_over_later = std::stoll(rest[6]);
+      r.labels = std::stoll(rest[7]);
+      r.dagger_samples = std::stoll(rest[8]);
     } catch (const std::exception&) {
       throw InputError(path, "line " + std::to_string(number) + " is malformed");
     }
@@ -366,9 +404,10 @@ DaggerReport run(const DaggerOptions& options, std::ostream* progress) {
     train.out_dir = model_dir(options, 0);
     (void)learn::train_models(train);
   }
-  report.expert = evaluate(options, "miqp", "", "eval-miqp", -1, progress);
+  report.expert = evaluate(options, "miqp", "", "eval-miqp", -1, {}, progress);
+  const std::vector<char> driven = driven_scenes(options);
   report.rounds.push_back(
-      evaluate(options, "mlp-miqp", model_dir(options, 0), "eval-0", 0, progress));
+      evaluate(options, "mlp-miqp", model_dir(options, 0), "eval-0", 0, driven, progress));
   Aggregate aggregate = read_aggregate(options);
   long long samples = 0;
   for (int r = 1; r <= options.rounds; ++r) {
@@ -388,7 +427,7 @@ DaggerReport run(const DaggerOptions& options, std::ostream* progress) {
       (void)learn::retrain_network(retrain);
     }
     RoundRow row = evaluate(options, "mlp-miqp", model_dir(options, r), "eval-" + std::to_string(r),
-                            r, progress);
+                            r, driven, progress);
     row.labels = aggregate.labelled[static_cast<std::size_t>(r - 1)];
     samples += aggregate.samples[static_cast<std::size_t>(r - 1)];
     row.dagger_samples = samples;

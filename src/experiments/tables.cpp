@@ -115,16 +115,19 @@ std::string percent(long long part, long long whole) {
 
 Table dagger_table(const dagger::DaggerReport& report) {
   Table t{{"round", "planner", "rollouts", "success", "take-overs per rollout", "collisions",
-           "at-fault collisions", "new well-posed labels", "DAgger samples so far"},
+           "at-fault collisions", "network drives", "taken over at the start", "taken over later",
+           "new well-posed labels", "DAgger samples so far"},
           {}};
   std::vector<dagger::RoundRow> rows = report.rounds;
   rows.push_back(report.expert);
   for (const auto& r : rows) {
+    const auto network = [&r](long long n) { return r.round < 0 ? "-" : std::to_string(n); };
     t.rows.push_back({r.round < 0 ? "-" : std::to_string(r.round), r.planner,
                       std::to_string(r.rollouts), fixed(100.0 * r.success_rate, 1) + "%",
                       fixed(r.takeovers_per_rollout, 2), fixed(100.0 * r.collision_rate, 1) + "%",
-                      fixed(100.0 * r.at_fault_collision_rate, 1) + "%", std::to_string(r.labels),
-                      std::to_string(r.dagger_samples)});
+                      fixed(100.0 * r.at_fault_collision_rate, 1) + "%", network(r.driven),
+                      network(r.taken_over_at_start), network(r.taken_over_later),
+                      std::to_string(r.labels), std::to_string(r.dagger_samples)});
   }
   return t;
 }

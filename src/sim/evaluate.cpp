@@ -107,7 +107,7 @@ std::string rollout_row(long long index, const Scenario& s, const std::string& p
   }
   for (double v : {m.time_to_target_lane >= 0 ? m.time_to_target_lane : NAN, m.min_gap, m.min_ttc,
                    m.max_abs_accel, m.rms_jerk, m.max_abs_omega, m.median_step_ms, m.p99_step_ms,
-                   m.max_step_ms}) {
+                   m.max_step_ms, m.first_takeover_t >= 0 ? m.first_takeover_t : NAN}) {
     row += ',';
     row += number(v);
   }
@@ -117,13 +117,28 @@ std::string rollout_row(long long index, const Scenario& s, const std::string& p
 }  // namespace
 
 std::vector<std::string> rollout_columns() {
-  return {"index",       "behavior",      "planner",
-          "outcome",     "collision",     "collision_at_fault",
-          "takeovers",   "fallbacks",     "overruns",
-          "failures",    "clipped",       "time_to_target_lane",
-          "min_gap",     "min_ttc",       "max_abs_accel",
-          "rms_jerk",    "max_abs_omega", "median_step_ms",
-          "p99_step_ms", "max_step_ms",   "target_lane_slot",
+  return {"index",
+          "behavior",
+          "planner",
+          "outcome",
+          "collision",
+          "collision_at_fault",
+          "takeovers",
+          "fallbacks",
+          "overruns",
+          "failures",
+          "clipped",
+          "time_to_target_lane",
+          "min_gap",
+          "min_ttc",
+          "max_abs_accel",
+          "rms_jerk",
+          "max_abs_omega",
+          "median_step_ms",
+          "p99_step_ms",
+          "max_step_ms",
+          "first_takeover_t",
+          "target_lane_slot",
           "reason"};
 }
 

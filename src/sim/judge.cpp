@@ -110,12 +110,14 @@ RolloutMetrics measure(const Rollout& rollout, const Scenario& scene, const Conf
   m.rms_jerk = applied > 0 ? std::sqrt(jerk_sq / applied) : 0.0;
   std::vector<double> ms;
   planner::ActStatus before = planner::ActStatus::Planned;
-  for (const StepRecord& s : rollout.steps) {
+  for (std::size_t k = 0; k < rollout.steps.size(); ++k) {
+    const StepRecord& s = rollout.steps[k];
     if (s.lane_keeping) continue;
     ms.push_back(s.compute_ms);
     m.max_step_ms = std::max(m.max_step_ms, s.compute_ms);
     // A take-over lasts while the expert drives: count its start.
     const bool took_over = s.status == planner::ActStatus::TookOver;
+    if (took_over && m.first_takeover_t < 0.0) m.first_takeover_t = t.t[k];
     m.takeovers += took_over && before != planner::ActStatus::TookOver ? 1 : 0;
     before = s.status;
     m.fallbacks += s.status == planner::ActStatus::Fallback ? 1 : 0;

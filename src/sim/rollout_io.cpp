@@ -44,18 +44,20 @@ json rollout_to_json(const Rollout& r) {
   out["compute_ms"]["steps"] = per_step;
   out["events"] = events(r);
   out["manoeuvre_over_at"] = number_or_null(r.manoeuvre_over_at >= 0 ? r.manoeuvre_over_at : NAN);
-  out["metrics"] = {{"time_to_target_lane",
-                     number_or_null(m.time_to_target_lane >= 0 ? m.time_to_target_lane : NAN)},
-                    {"min_gap", number_or_null(m.min_gap)},
-                    {"min_ttc", number_or_null(m.min_ttc)},
-                    {"max_abs_accel", m.max_abs_accel},
-                    {"rms_jerk", m.rms_jerk},
-                    {"max_abs_omega", m.max_abs_omega},
-                    {"takeovers", m.takeovers},
-                    {"fallbacks", m.fallbacks},
-                    {"clipped", m.clipped},
-                    {"overruns", m.overruns},
-                    {"failures", m.failures}};
+  out["metrics"] = {
+      {"time_to_target_lane",
+       number_or_null(m.time_to_target_lane >= 0 ? m.time_to_target_lane : NAN)},
+      {"min_gap", number_or_null(m.min_gap)},
+      {"min_ttc", number_or_null(m.min_ttc)},
+      {"max_abs_accel", m.max_abs_accel},
+      {"rms_jerk", m.rms_jerk},
+      {"max_abs_omega", m.max_abs_omega},
+      {"takeovers", m.takeovers},
+      {"first_takeover_t", number_or_null(m.first_takeover_t >= 0 ? m.first_takeover_t : NAN)},
+      {"fallbacks", m.fallbacks},
+      {"clipped", m.clipped},
+      {"overruns", m.overruns},
+      {"failures", m.failures}};
   return out;
 }
 

@@ -50,10 +50,11 @@ RolloutRow parse(const std::string& line) {
       r.target_lane_slot != "ahead_of_target" && r.target_lane_slot != "behind_follower") {
     throw std::invalid_argument("unknown target_lane_slot \"" + r.target_lane_slot + "\"");
   }
-  double* numbers[] = {
-      &r.takeovers,           &r.fallbacks,      &r.overruns,    &r.failures,      &r.clipped,
-      &r.time_to_target_lane, &r.min_gap,        &r.min_ttc,     &r.max_abs_accel, &r.rms_jerk,
-      &r.max_abs_omega,       &r.median_step_ms, &r.p99_step_ms, &r.max_step_ms};
+  double* numbers[] = {&r.takeovers,   &r.fallbacks,     &r.overruns,
+                       &r.failures,    &r.clipped,       &r.time_to_target_lane,
+                       &r.min_gap,     &r.min_ttc,       &r.max_abs_accel,
+                       &r.rms_jerk,    &r.max_abs_omega, &r.median_step_ms,
+                       &r.p99_step_ms, &r.max_step_ms,   &r.first_takeover_t};
   std::size_t column = 6;
   for (double* value : numbers) *value = cell_number(f[column++]);
   r.reason = reason;

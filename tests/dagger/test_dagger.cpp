@@ -299,8 +299,14 @@ TEST_F(DaggerCli, OneRoundAddsLabelsAsAValidDataSetAndTabulatesEachRound) {
   }
   EXPECT_EQ(table[1][0], "0");
   EXPECT_EQ(table[2][0], "1");
-  EXPECT_EQ(std::stoll(table[2][8]), after.samples.rows() - before.samples.rows());
-  EXPECT_EQ(std::stoll(table[2][7]), std::stoll(table[2][8]));  // one node per query
+  EXPECT_EQ(std::stoll(table[2][11]), after.samples.rows() - before.samples.rows());
+  EXPECT_EQ(std::stoll(table[2][10]), std::stoll(table[2][11]));  // one node per query
+  // The network drives the same scenes every round, and only it is taken over there.
+  EXPECT_EQ(table[1][7], table[2][7]);
+  for (std::size_t r = 1; r <= 2; ++r) {
+    EXPECT_LE(std::stoll(table[r][8]) + std::stoll(table[r][9]), std::stoll(table[r][7]));
+  }
+  EXPECT_EQ(table[3][7], "0");
 
   // --out holds the last round's model: a new network, the base's classifiers.
   const learn::Model model = learn::Model::load(dir_.file("model"));
@@ -327,7 +333,9 @@ TEST_F(DaggerCli, OneRoundAddsLabelsAsAValidDataSetAndTabulatesEachRound) {
   const dagger::DaggerReport back = dagger::read_report(work);
   ASSERT_EQ(back.rounds.size(), 2U);
   EXPECT_EQ(back.expert.planner, "miqp");
-  EXPECT_EQ(back.rounds[1].dagger_samples, std::stoll(table[2][8]));
+  EXPECT_EQ(back.rounds[1].dagger_samples, std::stoll(table[2][11]));
+  EXPECT_EQ(back.rounds[1].driven, std::stoll(table[2][7]));
+  EXPECT_EQ(back.rounds[1].taken_over_later, std::stoll(table[2][9]));
   EXPECT_DOUBLE_EQ(back.rounds[0].success_rate, std::stod(table[1][3]));
   const std::string damaged = dir_.file("damaged");
   fs::create_directories(damaged);

@@ -1,5 +1,7 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include "lanechange/sim/simulator.hpp"
 #include "planner/mlp_miqp_planner.hpp"
 #include "test_helpers.hpp"
@@ -27,6 +29,11 @@ TEST(MlpMiqp, ANetworkSteeringIntoACarIsTakenOverAndNothingIsHit) {
   const MlpMiqpPlanner p = forced(swerve_left);
   const sim::Rollout r = sim::simulate(s, p, testing::untimed_config());
   EXPECT_GE(r.metrics.takeovers, 1);
+  const auto first = std::find_if(r.steps.begin(), r.steps.end(), [](const sim::StepRecord& k) {
+    return k.status == planner::ActStatus::TookOver;
+  });
+  ASSERT_NE(first, r.steps.end());
+  EXPECT_EQ(r.metrics.first_takeover_t, r.trajectory.t[first - r.steps.begin()]);
   EXPECT_FALSE(r.trajectory.collision) << r.reason;
   // The expert finds no gap either, so the fallback keeps the ego lane.
   EXPECT_EQ(r.outcome, Outcome::Aborted) << r.reason;
@@ -52,6 +59,7 @@ TEST(MlpMiqp, ASceneClassedAsFailureIsNotTriedUnderThePapersRule) {
   const sim::Rollout r = sim::simulate(testing::open_road_scenario(), p, config);
   EXPECT_EQ(r.outcome, Outcome::Aborted);
   EXPECT_EQ(r.metrics.takeovers, 0);
+  EXPECT_EQ(r.metrics.first_takeover_t, -1.0);
   EXPECT_EQ(calls, 0);
 }
 
@@ -65,6 +73,7 @@ TEST(MlpMiqp, AWrongRefusalIsCaughtByTheExpertsCheck) {
   const sim::Rollout r = sim::simulate(testing::open_road_scenario(), p, config);
   EXPECT_EQ(r.outcome, Outcome::WellPosed) << r.reason;
   EXPECT_EQ(r.metrics.takeovers, 1);
+  EXPECT_EQ(r.metrics.first_takeover_t, 0.0);  // the check at the first step
   EXPECT_EQ(calls, 0);
   EXPECT_NE(r.steps.front().reason.find("the expert's check found a plan"), std::string::npos)
       << r.steps.front().reason;

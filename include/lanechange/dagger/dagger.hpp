@@ -74,6 +74,13 @@ struct RoundRow {
   double takeovers_per_rollout = 0.0;
   double collision_rate = 0.0;
   double at_fault_collision_rate = 0.0;
+  /// Rollouts the classifier lets the network drive (the same every round:
+  /// DAgger retrains the network only), and those the check takes from it
+  /// at the first step or later. The other take-overs are the expert's
+  /// check overruling a refusal, which DAgger does not touch.
+  long long driven = 0;
+  long long taken_over_at_start = 0;
+  long long taken_over_later = 0;
   long long labels = 0;          ///< expert queries answered with a well-posed plan, this round
   long long dagger_samples = 0;  ///< well-posed sample rows in the aggregated data set so far
 };

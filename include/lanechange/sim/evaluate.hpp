@@ -65,6 +65,7 @@ struct RolloutRow {
   double takeovers = 0, fallbacks = 0, overruns = 0, failures = 0, clipped = 0;
   double time_to_target_lane = 0, min_gap = 0, min_ttc = 0, max_abs_accel = 0, rms_jerk = 0;
   double max_abs_omega = 0, median_step_ms = 0, p99_step_ms = 0, max_step_ms = 0;
+  double first_takeover_t = 0;   ///< s; NaN: none
   std::string target_lane_slot;  ///< RolloutMetrics::target_lane_slot
   [[nodiscard]] bool success() const { return outcome == "well_posed" && !collision; }
 };

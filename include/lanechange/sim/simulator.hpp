@@ -51,6 +51,7 @@ struct RolloutMetrics {
   double p99_step_ms = 0.0;
   double max_step_ms = 0.0;
   int takeovers = 0;
+  double first_takeover_t = -1.0;  ///< s of the first take-over; -1: none
   int fallbacks = 0;
   int clipped = 0;
   int overruns = 0;
