@@ -27,7 +27,7 @@ using nlohmann::json;
 
 namespace {
 
-constexpr std::string_view kEvaluationFormat = "lanechange.evaluation/2";
+constexpr std::string_view kEvaluationFormat = "lanechange.evaluation/3";
 constexpr const char* kManifest = "evaluation.json";
 
 json parameters_of(const EvaluateOptions& o) {
