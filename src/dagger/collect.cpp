@@ -71,8 +71,6 @@ class LearnerSession final : public planner::PlannerSession {
   }
 
  private:
-  // The call miqp's re-plan makes, from the scene as it is now, but
-  // without a warm start: the learner's path is not the expert's.
   [[nodiscard]] planner::Decision network_decision(const planner::Observation& o) const {
     return {learner_.network(o), planner::ActStatus::Planned, ""};
   }
@@ -82,6 +80,8 @@ class LearnerSession final : public planner::PlannerSession {
     return static_cast<int>(std::lround(labelling_.past_takeover_s / dt));
   }
 
+  // The call miqp's re-plan makes, from the scene as it is now, but
+  // without a warm start: the learner's path is not the expert's.
   void label(const planner::Observation& o) {
     const Scenario now = planner::scene_now(o, learner_.config());
     sink_.push_back(

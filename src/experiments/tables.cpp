@@ -136,8 +136,10 @@ std::vector<std::string> dagger_verdicts(const dagger::DaggerReport& report) {
   const auto& rounds = report.rounds;
   if (rounds.size() < 2) return {"No DAgger round ran."};
   int falling = 0;
+  int falling_later = 0;
   for (std::size_t r = 1; r < rounds.size(); ++r) {
     falling += rounds[r].takeovers_per_rollout < rounds[r - 1].takeovers_per_rollout ? 1 : 0;
+    falling_later += rounds[r].taken_over_later < rounds[r - 1].taken_over_later ? 1 : 0;
   }
   const int steps = static_cast<int>(rounds.size()) - 1;
   const double gap = 100.0 * (report.expert.success_rate - rounds.back().success_rate);
@@ -145,6 +147,12 @@ std::vector<std::string> dagger_verdicts(const dagger::DaggerReport& report) {
       std::string(falling == steps ? "Met" : "Not met") +
           ": fewer take-overs per rollout with every round (" + std::to_string(falling) + " of " +
           std::to_string(steps) + " rounds lower than the round before).",
+      "Of those, the take-overs from states the network drove to (after its first step; "
+      "DAgger's own case) fell in " +
+          std::to_string(falling_later) + " of " + std::to_string(steps) + " rounds (" +
+          std::to_string(rounds.front().taken_over_later) + " before DAgger, " +
+          std::to_string(rounds.back().taken_over_later) + " after round " + std::to_string(steps) +
+          ").",
       std::string(gap <= 2.0 ? "Met" : "Not met") +
           ": mlp-miqp within 2 points of miqp after DAgger (" + fixed(gap, 1) +
           " points below miqp after round " + std::to_string(steps) + ").",

@@ -42,7 +42,8 @@ TEST(Experiments, ATinyRunWritesEveryTableAndFigureAndARerunReusesItsStages) {
   for (const char* section :
        {"Table I", "Table II: planners in closed loop (footprint", "Table III", "Generalization",
         "either_or lane rule", "Example rollouts", "85.171%", "93.1%",
-        "DAgger for the action network", "fewer take-overs per rollout with every round"}) {
+        "DAgger for the action network", "fewer take-overs per rollout with every round",
+        "the take-overs from states the network drove to", "taken over at the start"}) {
     EXPECT_NE(md.find(section), std::string::npos) << section;
   }
   // Every planner has a row in Table II, and every row has a number of scenes.
