@@ -40,9 +40,23 @@ struct Tally {
   std::vector<double> ratio, ratio_learned, strategy_ms, expert_ms, strategy_ms_learned;
   std::vector<double> rounds_run;  // candidates whose rounds a plan ran
   std::vector<double> screen_ms, predict_ms, followed_rounds, followed_ms;
+  json per_scene = json::array();  // the scenes with an expert plan, one record each
 };
 
-void add_scene(const StrategyQpPlanner& planner, const Scenario& scene, Tally& t) {
+std::string outcome_of(const CandidateOutcome& o) {
+  if (o.status != expert::PlanStatus::Converged) return std::string(expert::to_string(o.status));
+  return o.collision ? "collision" : o.rescued ? "feasible_trust_region" : "feasible";
+}
+
+// The exact plan's strategy in the model's terms (nodes 1..), to set beside
+// the candidates of a scene where none of them held.
+std::string exact_strategy(const expert::ExpertResult& exact) {
+  std::vector<int> lanes;
+  for (const auto& o : exact.occupancy) lanes.push_back(o ? static_cast<int>(*o) : -1);
+  return lanes.size() > 1 ? learn::strategy_of(lanes, 1) : "";
+}
+
+void add_scene(const StrategyQpPlanner& planner, const Scenario& scene, int index, Tally& t) {
   ++t.scenes;
   const expert::ExpertResult exact = planner.exact().plan(scene);
   const StrategyPlan learned = planner.plan(scene);
@@ -65,20 +79,28 @@ void add_scene(const StrategyQpPlanner& planner, const Scenario& scene, Tally& t
   // Feasibility is the model's: every candidate's rounds, whatever the plan
   // followed (the screen runs only as many as it needs).
   const std::vector<CandidateOutcome> c = planner.assess(scene);
+  json record = {{"index", index},
+                 {"behavior", to_string(scene.behavior)},
+                 {"exact_objective", exact.objective},
+                 {"exact_strategy", exact_strategy(exact)},
+                 {"followed", learned.chosen},
+                 {"candidates", json::array()}};
   for (const CandidateOutcome& o : c) {
-    std::string what(expert::to_string(o.status));
-    if (o.status == expert::PlanStatus::Converged) {
-      what = o.collision ? "collision" : o.rescued ? "feasible_trust_region" : "feasible";
-    }
-    ++t.candidate_outcomes[what];
+    ++t.candidate_outcomes[outcome_of(o)];
+    record["candidates"].push_back({{"strategy", o.strategy}, {"outcome", outcome_of(o)}});
   }
   const bool first = !c.empty() && c.front().feasible();
   t.top1 += first ? 1 : 0;
   t.topk += std::any_of(c.begin(), c.end(), [](const auto& o) { return o.feasible(); }) ? 1 : 0;
   t.followed += learned.chosen >= 0 ? 1 : 0;
   t.fallbacks += learned.chosen < 0 ? 1 : 0;
-  if (learned.result.status != expert::PlanStatus::Converged) return;
+  if (learned.result.status != expert::PlanStatus::Converged) {
+    t.per_scene.push_back(std::move(record));
+    return;
+  }
   const double ratio = learned.result.objective / exact.objective;
+  record["cost_ratio"] = ratio;
+  t.per_scene.push_back(std::move(record));
   t.ratio.push_back(ratio);
   if (learned.chosen >= 0) t.ratio_learned.push_back(ratio);
 }
@@ -86,18 +108,23 @@ void add_scene(const StrategyQpPlanner& planner, const Scenario& scene, Tally& t
 }  // namespace
 
 json run_strategy_study(const StrategyStudyOptions& o) {
-  if (o.count < 1) throw InputError("--count", "must be at least 1");
   if (o.model_dir.empty()) throw InputError("--model", "must name a model directory");
+  return run_strategy_study(o, learn::Model::load(o.model_dir).strategy());
+}
+
+json run_strategy_study(const StrategyStudyOptions& o,
+                        std::shared_ptr<const learn::StrategyModel> model) {
+  if (o.count < 1) throw InputError("--count", "must be at least 1");
   o.config.validate();
   // Open loop, as the data were made: the expert plans from the start with
   // the config's own expert.monotone_lateral, not the closed loop's.
   Config config = o.config;
   config.closed_loop.monotone_lateral = false;
-  const StrategyQpPlanner planner(config, learn::Model::load(o.model_dir).strategy());
+  const StrategyQpPlanner planner(config, std::move(model));
   const ScenarioSampler sampler(o.config, o.seed);
   Tally t;
   for (int i = 0; i < o.count; ++i) {
-    add_scene(planner, sampler.sample(static_cast<std::uint64_t>(i), o.behavior), t);
+    add_scene(planner, sampler.sample(static_cast<std::uint64_t>(i), o.behavior), i, t);
     if (o.progress != nullptr && (i + 1) % 50 == 0) {
       *o.progress << "strategy-study: " << i + 1 << " of " << o.count << " scenes\n";
     }
@@ -127,7 +154,8 @@ json run_strategy_study(const StrategyStudyOptions& o) {
           {"screen_ms", summary(t.screen_ms)},
           {"followed_rounds", summary(t.followed_rounds)},
           {"followed_rounds_ms", summary(t.followed_ms)},
-          {"speedup_of_medians", expert_median / strategy_median}};
+          {"speedup_of_medians", expert_median / strategy_median},
+          {"per_scene", std::move(t.per_scene)}};
 }
 
 std::string strategy_study_markdown(const json& s) {

@@ -8,6 +8,7 @@
 #include "lanechange/error.hpp"
 #include "lanechange/expert/planner.hpp"
 #include "lanechange/learn/strategy.hpp"
+#include "lanechange/planner/strategy_study.hpp"
 #include "lanechange/sampler.hpp"
 #include "lanechange/sim/simulator.hpp"
 #include "planner/strategy_qp_planner.hpp"
@@ -233,6 +234,44 @@ std::shared_ptr<const learn::StrategyModel> model_from_expert(const Scenario& s,
       planner::StrategyQpPlanner(config, model_of({s}, {"0"})).exact().plan(s);
   if (exact.status != PlanStatus::Converged) return model_of({s}, {"0"});
   return model_of({s}, {learn::strategy_of(lane_modes_of(exact))});
+}
+
+// On scenes the model has memorised, the study finds each scene's own
+// strategy first, feasible at the exact cost, and its per-scene records say so.
+TEST(Strategy, TheStudyOnMemorisedScenesFollowsTheirOwnStrategies) {
+  Config config = testing::untimed_config();
+  config.expert.steps = 20;
+  config.closed_loop.monotone_lateral = false;  // open loop, as the study plans
+  const std::uint64_t seed = 5;
+  const ScenarioSampler sampler(config, seed);
+  std::vector<Scenario> scenes;
+  std::vector<learn::Strategy> labels;
+  for (int i = 0; i < 6; ++i) {
+    const Scenario scene = sampler.sample(static_cast<std::uint64_t>(i));
+    const ExpertResult r = ExpertPlanner(config, fast()).plan(scene);
+    if (r.status != PlanStatus::Converged) continue;
+    scenes.push_back(scene);
+    labels.push_back(learn::strategy_of(lane_modes_of(r), 1));
+  }
+  ASSERT_GE(scenes.size(), 2U);
+  planner::StrategyStudyOptions o;
+  o.config = config;
+  o.count = 6;
+  o.seed = seed;
+  const nlohmann::json study = planner::run_strategy_study(o, model_of(scenes, labels));
+  const auto& records = study.at("per_scene");
+  ASSERT_EQ(records.size(), study.at("expert_plans").get<std::size_t>());
+  ASSERT_GE(records.size(), 1U);
+  EXPECT_EQ(study.at("top1_feasible").get<double>(), 1.0);
+  for (const auto& r : records) {
+    const auto& first = r.at("candidates").at(0);
+    EXPECT_EQ(first.at("strategy"), r.at("exact_strategy")) << r.dump();
+    EXPECT_EQ(first.at("outcome").get<std::string>().rfind("feasible", 0), 0U) << r.dump();
+    EXPECT_GE(r.at("followed").get<int>(), 0);
+    // The rounds start from the screen, not from the exact plan's path, so
+    // they end at a nearby linearization: within 1%, not at the same cost.
+    EXPECT_NEAR(r.at("cost_ratio").get<double>(), 1.0, 1e-2) << r.dump();
+  }
 }
 
 TEST(Strategy, ClosedLoopChangesLanesIntoAWideOpenGap) {

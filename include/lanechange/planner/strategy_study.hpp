@@ -5,12 +5,14 @@
 // feasible among those where the expert finds a plan, the cost ratio to the
 // exact optimum, and the time per plan with the speedup over the expert.
 #include <cstdint>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <ostream>
 #include <string>
 
 #include "lanechange/config.hpp"
+#include "lanechange/learn/strategy.hpp"
 #include "lanechange/scenario.hpp"
 
 namespace lanechange::planner {
@@ -28,6 +30,13 @@ struct StrategyStudyOptions {
 /// counts, shares, cost ratios and times; InputError for bad options or a
 /// model without a strategy model.
 [[nodiscard]] nlohmann::json run_strategy_study(const StrategyStudyOptions& options);
+/// The same with a strategy model in hand (options.model_dir is only
+/// recorded). The result's per_scene lists the scenes with an expert plan:
+/// index, behavior, the exact plan's objective and strategy, each
+/// candidate's strategy and outcome, the one followed (-1: the exact
+/// fallback) and the cost ratio.
+[[nodiscard]] nlohmann::json run_strategy_study(const StrategyStudyOptions& options,
+                                                std::shared_ptr<const learn::StrategyModel> model);
 
 /// The study as a Markdown table.
 [[nodiscard]] std::string strategy_study_markdown(const nlohmann::json& study);
