@@ -158,6 +158,43 @@ json run_strategy_study(const StrategyStudyOptions& o,
           {"per_scene", std::move(t.per_scene)}};
 }
 
+namespace {
+
+// "first/second": the nodes (from 1) where a strategy first crosses the
+// line and first is wholly in the target lane; "-" for never.
+std::string switch_nodes(const std::string& strategy) {
+  const auto node = [&strategy](char mode) {
+    const std::size_t at = strategy.find(mode);
+    return at == std::string::npos ? std::string("-") : std::to_string(at + 1);
+  };
+  return node('1') + "/" + node('2');
+}
+
+// The scenes with an expert plan where none of the k strategies held, with
+// the switch nodes of the exact plan and of each candidate.
+std::string unheld_scenes_markdown(const json& s) {
+  std::string rows;
+  for (const json& r : s.value("per_scene", json::array())) {
+    std::string candidates;
+    bool held = false;
+    for (const json& c : r.at("candidates")) {
+      held = held || c.at("outcome").get<std::string>().rfind("feasible", 0) == 0;
+      candidates += (candidates.empty() ? "" : ", ") + switch_nodes(c.at("strategy"));
+    }
+    if (held) continue;
+    rows += "| " + std::to_string(r.at("index").get<int>()) + " | " +
+            r.at("behavior").get<std::string>() + " | " + switch_nodes(r.at("exact_strategy")) +
+            " | " + candidates + " |\n";
+  }
+  if (rows.empty()) return "";
+  return "\nScenes with an expert plan where no candidate held (switch nodes: first node across "
+         "the line / first wholly in the target lane):\n\n| scene | behavior | exact plan | "
+         "candidates |\n|---|---|---|---|\n" +
+         rows;
+}
+
+}  // namespace
+
 std::string strategy_study_markdown(const json& s) {
   auto number = [](const json& v, const char* format) {
     if (!v.is_number()) return std::string("–");
@@ -211,7 +248,7 @@ std::string strategy_study_markdown(const json& s) {
   row(out, "screen ms (one QP per candidate)", s.at("screen_ms"));
   row(out, "rounds of the candidate followed", s.at("followed_rounds"));
   row(out, "its rounds' ms (with the collision check)", s.at("followed_rounds_ms"));
-  return out;
+  return out + unheld_scenes_markdown(s);
 }
 
 }  // namespace lanechange::planner

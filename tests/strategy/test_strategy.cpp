@@ -272,6 +272,24 @@ TEST(Strategy, TheStudyOnMemorisedScenesFollowsTheirOwnStrategies) {
     // they end at a nearby linearization: within 1%, not at the same cost.
     EXPECT_NEAR(r.at("cost_ratio").get<double>(), 1.0, 1e-2) << r.dump();
   }
+  // Every scene held, so the report lists none; a scene whose candidates all
+  // failed is listed with the nodes where each strategy switches lanes.
+  EXPECT_EQ(planner::strategy_study_markdown(study).find("no candidate held"), std::string::npos);
+  nlohmann::json unheld = study;
+  auto& scene = unheld["per_scene"][0];
+  for (auto& c : scene["candidates"]) c["outcome"] = "infeasible";
+  const std::string exact = scene["exact_strategy"];
+  const auto node = [&exact](char mode) {
+    const std::size_t at = exact.find(mode);
+    return at == std::string::npos ? std::string("-") : std::to_string(at + 1);
+  };
+  const std::string switches = node('1') + "/" + node('2');
+  const std::string md = planner::strategy_study_markdown(unheld);
+  EXPECT_NE(md.find("no candidate held"), std::string::npos) << md;
+  EXPECT_NE(md.find("| " + std::to_string(scene["index"].get<int>()) + " | " +
+                    scene["behavior"].get<std::string>() + " | " + switches + " |"),
+            std::string::npos)
+      << md;
 }
 
 TEST(Strategy, ClosedLoopChangesLanesIntoAWideOpenGap) {
