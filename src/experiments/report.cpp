@@ -123,15 +123,22 @@ void dagger_section(Document& d, const ReportInputs& in) {
   d.heading(2, "DAgger for the action network (beyond the paper)");
   d.paragraph(
       "The paper names DAgger (Ross et al. 2011) as future work (docs/strategy.md). Each round "
-      "rolls mlp-miqp with the last round's network out on " +
-      std::to_string(o.scenes) + " fresh training scenes (seed " + std::to_string(o.scene_seed) +
-      " on), has the closed-loop expert label the states the network drives into (every " +
+      "rolls the last round's network out " +
+      std::string(o.rollout == dagger::Rollout::Gated
+                      ? "under mlp-miqp's check (labels up to the take-over)"
+                      : "on its own (no take-over)") +
+      " on those of " + std::to_string(o.scenes) + " fresh training scenes (seed " +
+      std::to_string(o.scene_seed) +
+      " on) that the classifier lets it drive, has the closed-loop expert label the states the "
+      "network drives into (every " +
       std::to_string(o.stride) +
       " steps), adds those labels to the expert's data and retrains the "
       "network; round 0 is the model above. mlp-miqp is then scored on " +
       std::to_string(o.eval_count) + " held-out scenes of all behaviors (seed " +
       std::to_string(o.eval_seed) +
-      "), and miqp once on the same scenes. The same run alone: "
+      "), and miqp once on the same scenes. \"Network drives\" counts the held-out rollouts the "
+      "classifier lets the network drive; of those, the check takes some over at the network's "
+      "first step (the scene's own start) and some later. The same run alone: "
       "`lanechange train --data DATA... --dagger R` (docs/strategy.md).");
   d.table(dagger_table(*in.dagger));
   d.bullets(dagger_verdicts(*in.dagger));
