@@ -86,23 +86,22 @@ void add_scene(const StrategyQpPlanner& planner, const Scenario& scene, int inde
                  {"followed", learned.chosen},
                  {"candidates", json::array()}};
   for (const CandidateOutcome& o : c) {
-    ++t.candidate_outcomes[outcome_of(o)];
-    record["candidates"].push_back({{"strategy", o.strategy}, {"outcome", outcome_of(o)}});
+    const std::string outcome = outcome_of(o);
+    ++t.candidate_outcomes[outcome];
+    record["candidates"].push_back({{"strategy", o.strategy}, {"outcome", outcome}});
   }
   const bool first = !c.empty() && c.front().feasible();
   t.top1 += first ? 1 : 0;
   t.topk += std::any_of(c.begin(), c.end(), [](const auto& o) { return o.feasible(); }) ? 1 : 0;
   t.followed += learned.chosen >= 0 ? 1 : 0;
   t.fallbacks += learned.chosen < 0 ? 1 : 0;
-  if (learned.result.status != expert::PlanStatus::Converged) {
-    t.per_scene.push_back(std::move(record));
-    return;
+  if (learned.result.status == expert::PlanStatus::Converged) {
+    const double ratio = learned.result.objective / exact.objective;
+    record["cost_ratio"] = ratio;
+    t.ratio.push_back(ratio);
+    if (learned.chosen >= 0) t.ratio_learned.push_back(ratio);
   }
-  const double ratio = learned.result.objective / exact.objective;
-  record["cost_ratio"] = ratio;
   t.per_scene.push_back(std::move(record));
-  t.ratio.push_back(ratio);
-  if (learned.chosen >= 0) t.ratio_learned.push_back(ratio);
 }
 
 }  // namespace
