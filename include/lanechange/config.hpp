@@ -286,6 +286,9 @@ struct StrategyQpSettings {
   /// collision-free, and the cheapest of them is followed (2: the median
   /// cost within 1% of the optimum, docs/strategy.md; 1 is about 7% faster).
   int screen_keep = 2;
+  /// Screen with rough QPs (FixedModeSettings::rough): about half the
+  /// iterations, and only the ranking depends on them.
+  bool rough_screen = true;
   /// Without the screen: follow the first candidate that holds in the
   /// model's order (CoCo) instead of the cheapest of all (MLOPT).
   bool first_feasible = false;

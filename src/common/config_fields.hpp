@@ -198,6 +198,7 @@ void visit_fields(V& v, S& s) requires std::same_as<std::remove_const_t<S>, Stra
   v("candidates", s.candidates);
   v("screen", s.screen);
   v("screen_keep", s.screen_keep);
+  v("rough_screen", s.rough_screen);
   v("first_feasible", s.first_feasible);
 }
 

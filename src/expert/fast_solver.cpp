@@ -243,7 +243,7 @@ unsigned broken_bounds(const LaneChangeQp& qp, const Iterate& path) {
 }
 
 NodeOutcome solve_node_with(const LaneChangeQp& qp, const std::vector<int>& modes, unsigned bounds,
-                            double cutoff, bool coarse, FastWorkspace& ws) {
+                            double cutoff, NodePrecision precision, FastWorkspace& ws) {
   build_node(qp, modes, bounds, ws);
   ws.qp_workspace.setup(ws.node);
   ws.qp_workspace.set_initial_controls(ws.start_controls);
@@ -252,11 +252,12 @@ NodeOutcome solve_node_with(const LaneChangeQp& qp, const std::vector<int>& mode
   const double qp_cutoff = cutoff - qp.objective_constant();
   // A hair above the cutoff: a node this close is decided by its converged objective.
   settings.objective_cutoff = qp_cutoff + 1e-9 * (1.0 + std::abs(cutoff));
-  if (coarse) {
+  if (precision == NodePrecision::RoughBelowCutoff) {
     // Clearly below the cutoff: this node will be branched on, and a rough
     // point tells where as well as the optimum does.
     settings.coarse_below = qp_cutoff - 1e-2 * (1.0 + std::abs(cutoff));
   }
+  if (precision == NodePrecision::Rough) settings.coarse_below = kInfinity;
   const QpResult r = solve_structured_qp(ws.node, ws.qp_workspace, settings);
   NodeOutcome out;
   out.iterations = r.iterations;
@@ -281,14 +282,14 @@ NodeOutcome solve_node_with(const LaneChangeQp& qp, const std::vector<int>& mode
 // round's solutions have broken so far: solved again, with more, while its
 // solution breaks one.
 NodeOutcome solve_node(const LaneChangeQp& qp, const std::vector<int>& modes, FastWorkspace& ws,
-                       double cutoff, bool coarse) {
+                       double cutoff, NodePrecision precision) {
   int iterations = 0;
   NodeOutcome out;
   // Bound tightening refuses most infeasible nodes in microseconds, where the
   // interior-point method takes its whole iteration limit to give up.
   if (!modes_can_hold(qp, modes)) return out;
   for (;;) {
-    out = solve_node_with(qp, modes, ws.needed_bounds, cutoff, coarse, ws);
+    out = solve_node_with(qp, modes, ws.needed_bounds, cutoff, precision, ws);
     iterations += out.iterations;
     const unsigned broken = out.feasible ? broken_bounds(qp, out.path) & ~ws.needed_bounds : 0U;
     if (broken == 0) break;
@@ -670,7 +671,8 @@ LaneChangeSolution FastLaneChangeSolver::solve(const LaneChangeQp& qp, const Miq
     } else {
       modes = std::move(ws->stack.back());
       ws->stack.pop_back();
-      o = solve_node(qp, modes, *ws, prune_above(incumbent, settings), true);
+      o = solve_node(qp, modes, *ws, prune_above(incumbent, settings),
+                     NodePrecision::RoughBelowCutoff);
       ++out.nodes;
     }
     numerical_trouble = numerical_trouble || o.numerical_failure;

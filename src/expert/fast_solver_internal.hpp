@@ -61,10 +61,19 @@ FastWorkspace& workspace_for(const SolveHints& hints, std::unique_ptr<LaneChange
 void prepare_round(const LaneChangeQp& qp, const SolveHints& hints, FastWorkspace& ws,
                    bool reachable_modes = true);
 
+/// How far solve_node takes a QP.
+enum class NodePrecision {
+  Exact,
+  /// A node well below the cutoff may come back as a rough point: a branch
+  /// and bound only needs to see where to branch.
+  RoughBelowCutoff,
+  /// Any node may: enough to rank fixed-mode candidates, not to follow one.
+  Rough,
+};
+
 /// The QP of `modes` (kFreeMode where a node is free); see fast_solver.cpp.
 /// A node whose optimum is proven to be at least `cutoff` comes back infeasible.
-/// With `coarse`, a node well below the cutoff may come back as a rough point.
 NodeOutcome solve_node(const LaneChangeQp& qp, const std::vector<int>& modes, FastWorkspace& ws,
-                       double cutoff = kInfinity, bool coarse = false);
+                       double cutoff = kInfinity, NodePrecision precision = NodePrecision::Exact);
 
 }  // namespace lanechange::expert::detail

@@ -55,11 +55,19 @@ LaneChangeSolution FixedModeLaneChangeSolver::solve(const LaneChangeQp& qp,
   if (!out.message.empty()) return out;
   std::unique_ptr<LaneChangeWorkspace> owned;
   detail::FastWorkspace& ws = detail::workspace_for(hints, owned);
+  // With the modes fixed, a plan's rounds (and a screen's candidates) solve
+  // near-identical QPs: the state bounds one of them needed, the next will
+  // too, and carrying them saves solving it twice. An extra bound that does
+  // not bind changes nothing but the row count.
+  const unsigned bounds_needed_before = ws.needed_bounds;
   detail::prepare_round(qp, hints, ws);
+  ws.needed_bounds = bounds_needed_before;
   // Node 0's mode is not a choice (its state is given), so it stays free.
   std::vector<int> modes = *hints.modes;
   modes[0] = detail::kFreeMode;
-  detail::NodeOutcome node = detail::solve_node(qp, modes, ws);
+  detail::NodeOutcome node = detail::solve_node(
+      qp, modes, ws, kInfinity,
+      settings_.rough ? detail::NodePrecision::Rough : detail::NodePrecision::Exact);
   out.nodes = 1;
   out.qp_iterations = ws.iterations;
   out.solve_ms =

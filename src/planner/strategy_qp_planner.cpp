@@ -34,6 +34,7 @@ StrategyQpPlanner::StrategyQpPlanner(Config config,
     : config_(closed_loop_expert(std::move(config))),
       model_(std::move(model)),
       fixed_(config_, std::make_shared<expert::FixedModeLaneChangeSolver>()),
+      screen_solver_(expert::FixedModeSettings{config_.strategy_qp.rough_screen}),
       exact_(config_, std::make_shared<expert::FastLaneChangeSolver>()) {
   if (!model_) throw InputError("--model", "strategy-qp needs a lane-strategy model");
 }
@@ -112,12 +113,12 @@ void StrategyQpPlanner::follow_screened(const Scenario& scene, const expert::Pla
                                         std::vector<int>& rescued_hint) const {
   const auto start = Clock::now();
   const expert::LinearizedRound first = fixed_.first_round(scene, hints);
-  const auto workspace = fixed_.solver().make_workspace();
+  const auto workspace = screen_solver_.make_workspace();
   std::vector<expert::LaneChangeSolution> screens;
   std::vector<std::size_t> order;
   for (const Candidate& c : list) {
     screens.push_back(
-        fixed_.solver().solve(first.qp, {}, {workspace.get(), &c.modes, &first.point.controls}));
+        screen_solver_.solve(first.qp, {}, {workspace.get(), &c.modes, &first.point.controls}));
     CandidateOutcome o;
     o.strategy = c.strategy;
     if (screens.back().status == expert::MiqpStatus::Optimal) {

@@ -98,6 +98,7 @@ class StrategyQpPlanner final : public ClosedLoopPlanner {
   Config config_;
   std::shared_ptr<const learn::StrategyModel> model_;
   expert::ExpertPlanner fixed_;  ///< the expert's rounds with the fixed-mode solver
+  expert::FixedModeLaneChangeSolver screen_solver_;
   expert::ExpertPlanner exact_;
 };
 

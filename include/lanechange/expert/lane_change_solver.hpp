@@ -94,12 +94,23 @@ class FastLaneChangeSolver final : public LaneChangeSolver {
 /// when the modes are missing, do not fit the problem, or leave no point; the
 /// solution's modes are the given ones, so the next round keeps them.
 /// Shares FastLaneChangeSolver's workspace type.
+struct FixedModeSettings {
+  /// Stop at the first iterate within 1e-3 of the optimum (complementarity,
+  /// rows and slack): enough to rank candidate modes, as strategy-qp's screen
+  /// does, in about half the iterations; not a plan to follow.
+  bool rough = false;
+};
+
 class FixedModeLaneChangeSolver final : public LaneChangeSolver {
  public:
+  explicit FixedModeLaneChangeSolver(FixedModeSettings settings = {}) : settings_(settings) {}
   [[nodiscard]] std::string_view name() const override { return "fixed-mode"; }
   [[nodiscard]] std::unique_ptr<LaneChangeWorkspace> make_workspace() const override;
   [[nodiscard]] LaneChangeSolution solve(const LaneChangeQp& qp, const MiqpSettings& settings,
                                          const SolveHints& hints = {}) const override;
+
+ private:
+  FixedModeSettings settings_;
 };
 
 /// The solver named `name`: "fast" or "reference".
