@@ -325,6 +325,12 @@ struct Config {
 [[nodiscard]] std::vector<std::string> preset_names();
 
 void to_json(nlohmann::json& out, const Config& config);
+/// A config as JSON (to_json's) without the sections that only the
+/// comparison planners read (mpc, dwa, lattice, strategy_qp): what expert
+/// data and the models trained on them depend on. Data sets and models are
+/// matched on this, so that tuning or adding a planner setting does not
+/// orphan them.
+[[nodiscard]] nlohmann::json expert_data_config(nlohmann::json config);
 /// Starts from the preset named in the file (or "paper") and overrides the
 /// fields present. Unknown keys are an error, so typos do not pass silently.
 [[nodiscard]] Config config_from_json(const nlohmann::json& in);

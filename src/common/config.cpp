@@ -166,6 +166,15 @@ Config make_preset(std::string_view name) {
 
 void to_json(nlohmann::json& out, const Config& config) { out = detail::write_value(config); }
 
+nlohmann::json expert_data_config(nlohmann::json config) {
+  if (config.is_object()) {
+    for (const char* planner_only : {"mpc", "dwa", "lattice", "strategy_qp"}) {
+      config.erase(planner_only);
+    }
+  }
+  return config;
+}
+
 Config config_from_json(const nlohmann::json& in) {
   if (!in.is_object()) throw InputError("", "a config must be a JSON object");
   std::string preset = "paper";

@@ -197,7 +197,7 @@ void adopt_or_compare(LearningData& data, const json& manifest, const std::strin
       targets != data.action_targets || format != data.dataset_format) {
     throw InputError("", dir + " has other columns or format than " + data.datasets[0].dir);
   }
-  if (config != data.config) {
+  if (expert_data_config(config) != expert_data_config(data.config)) {
     throw InputError("", dir + " was made with another expert config than " + data.datasets[0].dir);
   }
 }

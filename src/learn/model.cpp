@@ -35,7 +35,8 @@ void require_same(const std::vector<std::string>& wanted, const json& have, cons
 void check_requirements(const json& d, const ModelRequirements& r) {
   require_same(r.classifier_features, d.at("features").at("classifier"), "classifier features");
   require_same(r.action_inputs, d.at("features").at("action_inputs"), "action inputs");
-  if (r.expert_config && *r.expert_config != d.at("expert_config")) {
+  if (r.expert_config &&
+      expert_data_config(*r.expert_config) != expert_data_config(d.at("expert_config"))) {
     throw InputError("", "the model was trained on data made with another expert config");
   }
 }

@@ -482,7 +482,7 @@ TrainReport retrain_network(const RetrainOptions& options) {
   check_out_dir(options.out_dir);
   const json base = Model::load(options.base_model).description();
   const LearningData data = load_learning_data(options.data_dirs);
-  if (data.config != base.at("expert_config")) {
+  if (expert_data_config(data.config) != expert_data_config(base.at("expert_config"))) {
     throw InputError("--data", "the data sets' expert config is not the base model's");
   }
   const BaseSplit split = base_split(data, base);

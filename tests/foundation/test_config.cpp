@@ -22,6 +22,24 @@ TEST(Config, SaveAndLoadRoundTrip) {
   EXPECT_EQ(loaded.expert.lane_rule, LaneRule::EitherOr);
 }
 
+// Data sets and models are matched on the expert's part of the config: a
+// planner setting may change (or be added) without orphaning them.
+TEST(Config, ExpertDataConfigLeavesOutThePlannersOwnSections) {
+  Config base;
+  Config tuned = base;
+  tuned.strategy_qp.candidates = 9;
+  tuned.mpc.max_iterations += 1;
+  tuned.dwa.accel_samples += 2;
+  EXPECT_NE(nlohmann::json(tuned), nlohmann::json(base));
+  EXPECT_EQ(expert_data_config(nlohmann::json(tuned)), expert_data_config(nlohmann::json(base)));
+  Config other_expert = base;
+  other_expert.expert.steps = 40;
+  EXPECT_NE(expert_data_config(nlohmann::json(other_expert)),
+            expert_data_config(nlohmann::json(base)));
+  EXPECT_FALSE(expert_data_config(nlohmann::json(base)).contains("strategy_qp"));
+  EXPECT_TRUE(expert_data_config(nlohmann::json(base)).contains("closed_loop"));
+}
+
 TEST(Config, GlobalisationRoundTripsThroughJson) {
   const Config c = config_from_json(nlohmann::json::parse(
       R"({"expert": {"globalisation": "off", "trust_radius": 0.75, "trust_shrink": 0.25,
