@@ -16,6 +16,12 @@ double ms_since(Clock::time_point start) {
   return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
 }
 
+long qp_iterations_of(const expert::ExpertResult& result) {
+  long sum = 0;
+  for (const expert::RoundReport& r : result.rounds) sum += r.qp_iterations;
+  return sum;
+}
+
 }  // namespace
 
 std::vector<int> modes_of_strategy(const learn::Strategy& strategy, int steps, LaneRule rule) {
@@ -80,6 +86,7 @@ bool StrategyQpPlanner::take_candidate(CandidateOutcome& o, const std::vector<in
                                        expert::ExpertResult& plan, StrategyPlan& out,
                                        std::vector<int>& rescued_hint) const {
   o.rounds_run = true;
+  out.qp_iterations += qp_iterations_of(plan);
   // Only plans of the plain rounds are followed: one the trust region
   // rescued may have stopped in a box far from any fixed point (hundreds of
   // times the optimum's cost in the study); its modes still make the best
@@ -119,6 +126,7 @@ void StrategyQpPlanner::follow_screened(const Scenario& scene, const expert::Pla
   for (const Candidate& c : list) {
     screens.push_back(
         screen_solver_.solve(first.qp, {}, {workspace.get(), &c.modes, &first.point.controls}));
+    out.qp_iterations += screens.back().qp_iterations;
     CandidateOutcome o;
     o.strategy = c.strategy;
     if (screens.back().status == expert::MiqpStatus::Optimal) {
@@ -169,6 +177,7 @@ StrategyPlan StrategyQpPlanner::plan(const Scenario& scene, const expert::PlanLi
     if (rescued_hint.empty() && !list.empty()) rescued_hint = list.front().modes;
     out.result =
         exact_.plan(scene, limits, {hints.path, rescued_hint.empty() ? nullptr : &rescued_hint});
+    out.qp_iterations += qp_iterations_of(out.result);
   }
   out.total_ms = ms_since(start);
   out.result.total_ms = out.total_ms;

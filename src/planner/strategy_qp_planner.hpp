@@ -40,6 +40,9 @@ struct StrategyPlan {
   int chosen = -1;                           ///< index into candidates; -1: the exact search
   double predict_ms = 0.0;
   double screen_ms = 0.0;  ///< the first round's QPs of every candidate
+  /// Interior-point iterations over every QP the plan solved (screen, rounds,
+  /// the exact search's): with the time per iteration, where the time goes.
+  long qp_iterations = 0;
   double total_ms = 0.0;
 };
 

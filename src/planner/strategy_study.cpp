@@ -40,6 +40,9 @@ struct Tally {
   std::vector<double> ratio, ratio_learned, strategy_ms, expert_ms, strategy_ms_learned;
   std::vector<double> rounds_run;  // candidates whose rounds a plan ran
   std::vector<double> screen_ms, predict_ms, followed_rounds, followed_ms;
+  // Plans without the fallback: their interior-point iterations, and the
+  // time per iteration (what a faster QP would change).
+  std::vector<double> qp_iterations_learned, us_per_iteration_learned;
   json per_scene = json::array();  // the scenes with an expert plan, one record each
 };
 
@@ -64,7 +67,12 @@ void add_scene(const StrategyQpPlanner& planner, const Scenario& scene, int inde
   t.strategy_ms.push_back(learned.total_ms);
   const bool expert_found = exact.status == expert::PlanStatus::Converged &&
                             !planner.exact().to_trajectory(exact, scene).collision;
-  if (learned.chosen >= 0) t.strategy_ms_learned.push_back(learned.total_ms);
+  if (learned.chosen >= 0) {
+    t.strategy_ms_learned.push_back(learned.total_ms);
+    const auto iterations = static_cast<double>(learned.qp_iterations);
+    t.qp_iterations_learned.push_back(iterations);
+    if (iterations > 0) t.us_per_iteration_learned.push_back(1e3 * learned.total_ms / iterations);
+  }
   t.screen_ms.push_back(learned.screen_ms);
   t.predict_ms.push_back(learned.predict_ms);
   if (learned.chosen >= 0) {
@@ -153,6 +161,8 @@ json run_strategy_study(const StrategyStudyOptions& o,
           {"screen_ms", summary(t.screen_ms)},
           {"followed_rounds", summary(t.followed_rounds)},
           {"followed_rounds_ms", summary(t.followed_ms)},
+          {"qp_iterations_without_fallback", summary(t.qp_iterations_learned)},
+          {"us_per_qp_iteration_without_fallback", summary(t.us_per_iteration_learned)},
           {"speedup_of_medians", expert_median / strategy_median},
           {"per_scene", std::move(t.per_scene)}};
 }
@@ -247,6 +257,9 @@ std::string strategy_study_markdown(const json& s) {
   row(out, "screen ms (one QP per candidate)", s.at("screen_ms"));
   row(out, "rounds of the candidate followed", s.at("followed_rounds"));
   row(out, "its rounds' ms (with the collision check)", s.at("followed_rounds_ms"));
+  row(out, "QP iterations per plan, no fallback", s.at("qp_iterations_without_fallback"));
+  row(out, "µs per QP iteration (plan time / iterations), no fallback",
+      s.at("us_per_qp_iteration_without_fallback"));
   return out + unheld_scenes_markdown(s);
 }
 

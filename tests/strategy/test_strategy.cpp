@@ -286,6 +286,11 @@ TEST(Strategy, TheStudyOnMemorisedScenesFollowsTheirOwnStrategies) {
     // they end at a nearby linearization: within 1%, not at the same cost.
     EXPECT_NEAR(r.at("cost_ratio").get<double>(), 1.0, 1e-2) << r.dump();
   }
+  // Every followed plan solved its screen QP and at least one round.
+  const auto& iterations = study.at("qp_iterations_without_fallback");
+  EXPECT_EQ(iterations.at("count"), study.at("strategy_ms_without_fallback").at("count"));
+  EXPECT_GE(iterations.at("median").get<double>(), 2.0);
+  EXPECT_GT(study.at("us_per_qp_iteration_without_fallback").at("median").get<double>(), 0.0);
   // Every scene held, so the report lists none; a scene whose candidates all
   // failed is listed with the nodes where each strategy switches lanes.
   EXPECT_EQ(planner::strategy_study_markdown(study).find("no candidate held"), std::string::npos);
