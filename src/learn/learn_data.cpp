@@ -48,6 +48,7 @@ class CsvFile {
   }
   [[nodiscard]] std::vector<std::size_t> columns(const std::vector<std::string>& names) const {
     std::vector<std::size_t> out;
+    out.reserve(names.size());
     for (const std::string& n : names) out.push_back(column(n));
     return out;
   }

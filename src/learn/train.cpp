@@ -41,6 +41,7 @@ struct Seeds {
 
 std::vector<int> labels_of(const std::vector<int>& all, const std::vector<int>& rows) {
   std::vector<int> out;
+  out.reserve(rows.size());
   for (int r : rows) out.push_back(all[static_cast<std::size_t>(r)]);
   return out;
 }
@@ -246,7 +247,8 @@ void train_action_network(Context& c) {
   const std::vector<char> validation_mask = validation_scenarios(c);
   std::vector<char> fit_mask = mask_of(c.split.train, n);
   for (int i = 0; i < n; ++i)
-    fit_mask[static_cast<std::size_t>(i)] &= !validation_mask[static_cast<std::size_t>(i)];
+    if (validation_mask[static_cast<std::size_t>(i)] != 0)
+      fit_mask[static_cast<std::size_t>(i)] = 0;
   const std::vector<int> fit = sample_rows_of(s, fit_mask);
   const std::vector<int> validation = sample_rows_of(s, validation_mask);
   const std::vector<int> test = sample_rows_of(s, mask_of(c.split.test, n));
