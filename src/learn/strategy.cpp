@@ -90,15 +90,47 @@ const std::vector<std::string>& strategy_feature_names() {
                                                  "horizon",
                                                  "behavior_constant_speed",
                                                  "behavior_constant_accel",
-                                                 "behavior_idm"};
+                                                 "behavior_idm",
+                                                 "gap_open_s"};
   return names;
+}
+
+namespace {
+
+// How far ahead gap_open_s looks: past the 5 s horizon, so that "opens late"
+// and "does not open" stay apart, and the same for every horizon left.
+constexpr double kGapLookahead = 10.0;
+constexpr double kGapTimeStep = 0.1;
+
+// Where a car is after t s at its acceleration (stopped, not reversing).
+double position_after(const CarState& c, double t) {
+  const double moving = c.a < 0.0 ? std::min(t, -c.v / c.a) : t;
+  return c.x + c.v * moving + 0.5 * c.a * moving * moving;
+}
+
+}  // namespace
+
+double gap_open_time(const Scenario& s) {
+  const SafetyMargins d = s.centre_safe_distances();
+  const double ahead_needed = d.target.standstill + d.target.time_headway * s.ego.v;
+  for (int i = 0; i * kGapTimeStep <= kGapLookahead; ++i) {
+    const double t = i * kGapTimeStep;
+    const double ego_x = s.ego.x + s.ego.v * t;
+    const double follower_v = std::max(0.0, s.follower.v + s.follower.a * t);
+    const double behind_needed = d.follower.standstill + d.follower.time_headway * follower_v;
+    if (position_after(s.target, t) - ego_x >= ahead_needed &&
+        ego_x - position_after(s.follower, t) >= behind_needed) {
+      return t;
+    }
+  }
+  return kGapLookahead;
 }
 
 Eigen::VectorXd strategy_features(const Scenario& s) {
   Eigen::VectorXd f(static_cast<Eigen::Index>(strategy_feature_names().size()));
   f << s.ego.y, s.ego.theta, s.ego.v, s.ego.a, s.leader.x - s.ego.x, s.leader.v, s.leader.a,
       s.follower.x - s.ego.x, s.follower.v, s.follower.a, s.target.x - s.ego.x, s.target.v,
-      s.target.a, s.horizon, 0.0, 0.0, 0.0;
+      s.target.a, s.horizon, 0.0, 0.0, 0.0, gap_open_time(s);
   f(14 + static_cast<Eigen::Index>(s.behavior)) = 1.0;
   return f;
 }
@@ -206,7 +238,9 @@ std::vector<Strategy> StrategyModel::predict(const Eigen::VectorXd& features, in
 
 json StrategyModel::to_json() const {
   std::vector<double> points(points_.data(), points_.data() + points_.size());
-  return {{"format", kStrategyFormat}, {"features", strategy_feature_names()},
+  const auto& all = strategy_feature_names();
+  const std::vector<std::string> names(all.begin(), all.begin() + points_.rows());
+  return {{"format", kStrategyFormat}, {"features", names},
           {"neighbors", neighbors_},   {"standardizer", standardizer_.to_json()},
           {"strategies", strategies_}, {"labels", label_},
           {"points", points}};
@@ -216,7 +250,12 @@ StrategyModel StrategyModel::from_json(const json& j) {
   if (j.value("format", std::string()) != kStrategyFormat) {
     throw InputError("", "not a " + std::string(kStrategyFormat) + " strategy model");
   }
-  if (j.at("features").get<std::vector<std::string>>() != strategy_feature_names()) {
+  // A model from before a feature was added has the leading ones: it votes
+  // on those, as it was trained.
+  const auto names = j.at("features").get<std::vector<std::string>>();
+  const auto& all = strategy_feature_names();
+  if (names.empty() || names.size() > all.size() ||
+      !std::equal(names.begin(), names.end(), all.begin())) {
     throw InputError("", "the strategy model was trained on other features");
   }
   StrategyModel m;
@@ -225,7 +264,7 @@ StrategyModel StrategyModel::from_json(const json& j) {
   m.strategies_ = j.at("strategies").get<std::vector<Strategy>>();
   m.label_ = j.at("labels").get<std::vector<int>>();
   const auto points = j.at("points").get<std::vector<double>>();
-  const auto width = static_cast<Eigen::Index>(strategy_feature_names().size());
+  const auto width = static_cast<Eigen::Index>(names.size());
   const auto n = static_cast<Eigen::Index>(m.label_.size());
   if (static_cast<Eigen::Index>(points.size()) != width * n || m.neighbors_ < 1) {
     throw InputError("", "the strategy model's rows do not fit its labels");

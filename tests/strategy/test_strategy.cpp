@@ -131,6 +131,49 @@ TEST(Strategy, StrategiesStretchAndShrinkToTheHorizon) {
   EXPECT_THROW((void)learn::strategy_of({-1, -1, 2}), InputError);
 }
 
+TEST(Strategy, TheGapOpensWhenBothSafeDistancesHold) {
+  const Scenario open = testing::open_road_scenario();
+  EXPECT_EQ(learn::gap_open_time(open), 0.0);
+  EXPECT_EQ(learn::gap_open_time(testing::no_gap_scenario()), 10.0);  // never, within 10 s
+  // A target just ahead that pulls away: the gap opens once it is far enough.
+  Scenario opening = open;
+  opening.target = {5.0, 12.0, 0.0};
+  const double t = learn::gap_open_time(opening);
+  const SafetyMargins d = opening.centre_safe_distances();
+  const double needed = d.target.standstill + d.target.time_headway * opening.ego.v;
+  const auto ahead = [&opening](double at) {
+    return opening.target.x + opening.target.v * at - (opening.ego.x + opening.ego.v * at);
+  };
+  ASSERT_GT(t, 0.0);
+  EXPECT_GE(ahead(t), needed);
+  EXPECT_LT(ahead(t - 0.1), needed);
+  EXPECT_EQ(learn::strategy_features(opening)(17), t);
+  ASSERT_EQ(learn::strategy_feature_names().size(), 18U);
+  EXPECT_EQ(learn::strategy_feature_names()[17], "gap_open_s");
+}
+
+// A model saved before gap_open_s existed holds the 17 leading features: it
+// still loads and votes on those; other names are refused.
+TEST(Strategy, AModelFromBeforeTheGapFeatureStillVotes) {
+  Scenario near = testing::open_road_scenario();
+  Scenario far = near;
+  far.target.x += 30.0;
+  learn::StrategyRows rows;
+  for (const Scenario& s : {near, near, far}) {
+    rows.features.push_back(learn::strategy_features(s).head(17));
+  }
+  rows.labels = {"000", "000", "222"};
+  const auto old = learn::StrategyModel::fit(rows, {3, 0});
+  nlohmann::json saved = old.to_json();
+  EXPECT_EQ(saved.at("features").size(), 17U);
+  const auto loaded = learn::StrategyModel::from_json(saved);
+  EXPECT_EQ(loaded.features(), 17);
+  EXPECT_EQ(loaded.predict(near, 5), old.predict(near, 5));
+  EXPECT_EQ(loaded.predict(far, 1), std::vector<learn::Strategy>{"222"});
+  saved["features"][16] = "behavior_other";
+  EXPECT_THROW((void)learn::StrategyModel::from_json(saved), InputError);
+}
+
 TEST(Strategy, TheVoteRanksTheNearestScenesStrategiesFirst) {
   Scenario near = testing::open_road_scenario();
   Scenario far = near;

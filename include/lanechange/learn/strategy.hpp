@@ -35,10 +35,19 @@ struct StrategySettings {
 
 /// The features of a scene, in strategy_feature_names() order: the ego's
 /// lateral state, speed and acceleration, each car's gap to the ego, speed
-/// and acceleration, the horizon and the behavior one-hot. Relative gaps make
-/// a scene mid-manoeuvre look like a start.
+/// and acceleration, the horizon, the behavior one-hot and gap_open_time().
+/// Relative gaps make a scene mid-manoeuvre look like a start. New features
+/// go at the end: a model trained before one was added uses the leading ones.
 [[nodiscard]] const std::vector<std::string>& strategy_feature_names();
 [[nodiscard]] Eigen::VectorXd strategy_features(const Scenario& scene);
+
+/// The first time (s, on a 0.1 s grid, at most 10) at which an ego that keeps
+/// its speed would be at the centre safe distances behind the target car and
+/// ahead of the follower, each car keeping its acceleration. The gaps alone
+/// do not tell the vote when a lane change becomes possible: most scenes
+/// where no top-k strategy held changed lanes late, while the neighbours
+/// changed early (docs/strategy.md).
+[[nodiscard]] double gap_open_time(const Scenario& scene);
 
 /// Training rows: scenes and the strategy their plan follows from there.
 struct StrategyRows {
@@ -62,8 +71,10 @@ class StrategyModel {
   /// inverse-distance vote).
   [[nodiscard]] std::vector<Strategy> predict(const Eigen::VectorXd& features, int count) const;
   [[nodiscard]] std::vector<Strategy> predict(const Scenario& scene, int count) const {
-    return predict(strategy_features(scene), count);
+    return predict(strategy_features(scene).head(points_.rows()), count);
   }
+  /// The leading strategy_feature_names() it was trained on.
+  [[nodiscard]] int features() const { return static_cast<int>(points_.rows()); }
   [[nodiscard]] int rows() const { return static_cast<int>(label_.size()); }
   [[nodiscard]] int strategies() const { return static_cast<int>(strategies_.size()); }
 
