@@ -184,6 +184,17 @@ StrategyPlan StrategyQpPlanner::plan(const Scenario& scene, const expert::PlanLi
   return out;
 }
 
+CandidateOutcome StrategyQpPlanner::assess_strategy(const Scenario& scene,
+                                                    const learn::Strategy& strategy) const {
+  const LaneRule rule = effective_config(config_, scene).expert.lane_rule;
+  expert::ExpertResult plan;
+  CandidateOutcome o =
+      solve_candidate(scene, modes_of_strategy(strategy, scene.steps, rule), {}, {}, plan);
+  o.strategy = strategy;
+  o.rounds_run = true;
+  return o;
+}
+
 std::vector<CandidateOutcome> StrategyQpPlanner::assess(const Scenario& scene,
                                                         const expert::PlanLimits& limits,
                                                         const expert::PlanHints& hints) const {

@@ -63,6 +63,10 @@ class StrategyQpPlanner final : public ClosedLoopPlanner {
                                   const expert::PlanHints& hints = {}) const;
   /// Every candidate of `plan`, each with its rounds run (none followed):
   /// what the study counts as top-1 and top-k feasible.
+  /// One strategy's rounds from the expert's warm start, as assess() runs
+  /// each candidate: with a plan's own strategy, what a perfect vote gets.
+  [[nodiscard]] CandidateOutcome assess_strategy(const Scenario& scene,
+                                                 const learn::Strategy& strategy) const;
   [[nodiscard]] std::vector<CandidateOutcome> assess(const Scenario& scene,
                                                      const expert::PlanLimits& limits = {},
                                                      const expert::PlanHints& hints = {}) const;

@@ -308,7 +308,7 @@ TEST(Strategy, TheStudyOnMemorisedScenesFollowsTheirOwnStrategies) {
     const ExpertResult r = ExpertPlanner(config, fast()).plan(scene);
     if (r.status != PlanStatus::Converged) continue;
     scenes.push_back(scene);
-    labels.push_back(learn::strategy_of(lane_modes_of(r), 1));
+    labels.push_back(learn::strategy_of(lane_modes_of(r)));
   }
   ASSERT_GE(scenes.size(), 2U);
   planner::StrategyStudyOptions o;
@@ -320,14 +320,20 @@ TEST(Strategy, TheStudyOnMemorisedScenesFollowsTheirOwnStrategies) {
   ASSERT_EQ(records.size(), study.at("expert_plans").get<std::size_t>());
   ASSERT_GE(records.size(), 1U);
   EXPECT_EQ(study.at("top1_feasible").get<double>(), 1.0);
+  EXPECT_EQ(study.at("own_strategy_holds").get<double>(), 1.0);
   for (const auto& r : records) {
     const auto& first = r.at("candidates").at(0);
     EXPECT_EQ(first.at("strategy"), r.at("exact_strategy")) << r.dump();
     EXPECT_EQ(first.at("outcome").get<std::string>().rfind("feasible", 0), 0U) << r.dump();
     EXPECT_GE(r.at("followed").get<int>(), 0);
-    // The rounds start from the screen, not from the exact plan's path, so
-    // they end at a nearby linearization: within 1%, not at the same cost.
-    EXPECT_NEAR(r.at("cost_ratio").get<double>(), 1.0, 1e-2) << r.dump();
+    // The plan's own strategy holds, and the cheapest that holds is followed.
+    // Its rounds start from the screen, not from the exact plan's path, so
+    // they end at a nearby linearization: at most 1% dearer. Another
+    // memorised strategy may land on a cheaper fixed point of the rounds
+    // than the exact search's own (each round is exact, the rounds are not).
+    EXPECT_EQ(r.at("exact_strategy_outcome").get<std::string>().rfind("feasible", 0), 0U);
+    EXPECT_LE(r.at("cost_ratio").get<double>(), 1.0 + 1e-2) << r.dump();
+    EXPECT_GT(r.at("cost_ratio").get<double>(), 0.5) << r.dump();
   }
   // Every followed plan solved its screen QP and at least one round.
   const auto& iterations = study.at("qp_iterations_without_fallback");
