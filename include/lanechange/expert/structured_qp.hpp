@@ -84,6 +84,10 @@ struct QpSettings {
   /// take the point as a solution.
   double coarse_below = -std::numeric_limits<double>::infinity();
   double coarse_tolerance = 1e-3;
+  /// Where the method starts each row's complementarity product. About the
+  /// size of the products that the rows' distances give this problem family
+  /// (metres and m/s); 1 took a fifth more iterations, 1e4 no fewer.
+  double initial_complementarity = 1e3;
 };
 
 enum class QpStatus {
