@@ -62,6 +62,9 @@ LaneChangeSolution FixedModeLaneChangeSolver::solve(const LaneChangeQp& qp,
   const unsigned bounds_needed_before = ws.needed_bounds;
   detail::prepare_round(qp, hints, ws);
   ws.needed_bounds = bounds_needed_before;
+  // A plan's next round solves nearly the same QP: its interior-point
+  // method starts from the last one's multipliers where the rows match.
+  ws.warm_start_qp = true;
   // Node 0's mode is not a choice (its state is given), so it stays free.
   std::vector<int> modes = *hints.modes;
   modes[0] = detail::kFreeMode;

@@ -11,10 +11,13 @@ using GainMatrix = Eigen::Matrix<double, kQpControls, kQpStates>;
 
 void QpWorkspace::setup(const StructuredQp& qp) {
   const int stages = qp.steps() + 1;
+  const std::vector<int> previous_offsets = row_offset_;
   row_offset_.assign(stages + 1, 0);
   for (int k = 0; k < stages; ++k) {
     row_offset_[k + 1] = row_offset_[k] + static_cast<int>(qp.stages[k].rows.size());
   }
+  // The last solution's multipliers fit this problem only row for row.
+  has_solution_ = has_solution_ && previous_offsets == row_offset_;
   const std::size_t rows = row_offset_.back();
   single_index_.assign(rows, -1);
   for (int k = 0; k < stages; ++k) {
@@ -43,9 +46,12 @@ void QpWorkspace::setup(const StructuredQp& qp) {
   if (initial_controls_.size() != static_cast<std::size_t>(stages)) {
     initial_controls_.assign(stages, Eigen::Vector2d::Zero());
   }
-  for (auto* v : {&t_, &lambda_, &sigma_, &lambda_soft_, &dt_, &dlambda_, &dsigma_, &dlambda_soft_,
-                  &weight_, &offset_, &soft_q_, &dt_aff_, &dlambda_aff_, &dsigma_aff_,
-                  &dlambda_soft_aff_, &a_, &inverse_t_, &inverse_sigma_, &inverse_a_plus_b_}) {
+  if (!has_solution_) {
+    for (auto* v : {&t_, &lambda_, &sigma_, &lambda_soft_}) v->assign(rows, 0.0);
+  }
+  for (auto* v : {&dt_, &dlambda_, &dsigma_, &dlambda_soft_, &weight_, &offset_, &soft_q_, &dt_aff_,
+                  &dlambda_aff_, &dsigma_aff_, &dlambda_soft_aff_, &a_, &inverse_t_,
+                  &inverse_sigma_, &inverse_a_plus_b_}) {
     v->assign(rows, 0.0);
   }
 }
@@ -151,6 +157,10 @@ struct InteriorPointMethod {
     // of the size of rho). A start with lambda = 1 everywhere and a violated
     // soft row's t at 1e-2 took steps of 1e-4 for the first five to eight
     // iterations, until the products had evened out.
+    if (settings.warm_start && ws.has_solution_) {
+      warm_rows();
+      return;
+    }
     const double mu0 = settings.initial_complementarity;
     for_each_row([&](int k, const QpRow& row, int i) {
       const double room = row.d - row_dot(row, i, ws.w_[k]);
@@ -164,6 +174,25 @@ struct InteriorPointMethod {
       ws.lambda_soft_[i] = qp.softness_weight - ws.lambda_[i];
       ws.sigma_[i] = violation + mu0 / ws.lambda_soft_[i];
       ws.t_[i] = std::max(room + ws.sigma_[i], 1.0);
+    });
+  }
+
+  // The last solution's multipliers and slacks, each pushed at least
+  // warm_start_floor off its bound: a point that close to the boundary
+  // would block the first steps.
+  void warm_rows() {
+    const double floor = settings.warm_start_floor;
+    for_each_row([&](int k, const QpRow& row, int i) {
+      const double room = row.d - row_dot(row, i, ws.w_[k]);
+      if (!row.soft) {
+        ws.t_[i] = std::max(room, floor);
+        ws.lambda_[i] = std::max(ws.lambda_[i], floor);
+        return;
+      }
+      ws.lambda_[i] = std::clamp(ws.lambda_[i], floor, qp.softness_weight - floor);
+      ws.lambda_soft_[i] = qp.softness_weight - ws.lambda_[i];
+      ws.sigma_[i] = std::max(-room, 0.0) + floor * floor / ws.lambda_soft_[i];
+      ws.t_[i] = std::max(room + ws.sigma_[i], floor);
     });
   }
 
@@ -562,6 +591,7 @@ struct InteriorPointMethod {
     for (int k = 0; k <= n; ++k) {
       if (!ws.w_[k].allFinite()) result.status = QpStatus::NumericalError;
     }
+    ws.has_solution_ = result.status == QpStatus::Optimal;
     return result;
   }
 };

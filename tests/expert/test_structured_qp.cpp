@@ -140,3 +140,31 @@ TEST(StructuredQp, CoarseStopComesEarlyAndCloseToTheOptimum) {
     EXPECT_EQ(lc::solve_structured_qp(qp, ws, settings).status, lc::QpStatus::Optimal);
   }
 }
+
+// A successive linearization's next round: the same rows, slightly moved
+// costs and dynamics. Started from the last solution, the method lands on
+// the cold start's optimum.
+TEST(StructuredQp, AWarmStartReachesTheColdOptimum) {
+  int fewer = 0;
+  for (unsigned seed = 1; seed <= 20; ++seed) {
+    const lc::StructuredQp qp = random_qp(seed, {0.5, 1e-6}, true);
+    lc::StructuredQp next = qp;
+    for (auto& stage : next.stages) {
+      stage.h *= 1.05;
+      stage.c *= 0.95;
+    }
+    lc::QpWorkspace ws;
+    ws.setup(qp);
+    ASSERT_EQ(lc::solve_structured_qp(qp, ws, {}).status, lc::QpStatus::Optimal);
+    ws.setup(next);
+    lc::QpSettings warm;
+    warm.warm_start = true;
+    const lc::QpResult from_last = lc::solve_structured_qp(next, ws, warm);
+    const lc::QpResult cold = solve(next, std::numeric_limits<double>::infinity());
+    ASSERT_EQ(from_last.status, lc::QpStatus::Optimal) << "seed " << seed;
+    EXPECT_NEAR(from_last.objective, cold.objective, 1e-7 * (1.0 + std::abs(cold.objective)))
+        << "seed " << seed;
+    fewer += from_last.iterations < cold.iterations ? 1 : 0;
+  }
+  EXPECT_GE(fewer, 10);  // most of them
+}

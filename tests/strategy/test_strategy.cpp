@@ -80,14 +80,14 @@ TEST(Strategy, AStrategyFromAnExactPlanGivesBackItsCost) {
     ASSERT_EQ(one.status, expert::MiqpStatus::Optimal) << one.message;
     EXPECT_NEAR(one.objective, best.objective, 1e-6 * (1.0 + std::abs(best.objective)));
     EXPECT_EQ(one.nodes, 1);
-    // A workspace that carries the state bounds of an earlier solve (the
-    // screen's, a plan's rounds) changes the row count, not the answer.
+    // A workspace that carries the state bounds and the multipliers of an
+    // earlier solve (the screen's, a plan's rounds) changes the work, not the
+    // answer.
     const auto workspace = fixed.make_workspace();
     (void)fixed.solve(qp, {}, {workspace.get(), &best.modes, nullptr});
     const auto reused = fixed.solve(qp, {}, {workspace.get(), &best.modes, nullptr});
     ASSERT_EQ(reused.status, expert::MiqpStatus::Optimal);
     EXPECT_NEAR(reused.objective, best.objective, 1e-6 * (1.0 + std::abs(best.objective)));
-    EXPECT_LE(reused.qp_iterations, one.qp_iterations);
     // The screen's rough solve stops early, near the optimum.
     const auto rough = expert::FixedModeLaneChangeSolver({.rough = true})
                            .solve(qp, {}, {nullptr, &best.modes, nullptr});

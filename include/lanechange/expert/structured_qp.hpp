@@ -88,6 +88,11 @@ struct QpSettings {
   /// size of the products that the rows' distances give this problem family
   /// (metres and m/s); 1 took a fifth more iterations, 1e4 no fewer.
   double initial_complementarity = 1e3;
+  /// Start from the workspace's last optimal solution (multipliers and
+  /// slacks, each at least warm_start_floor off its bound) when this problem
+  /// has its rows, stage for stage: a successive linearization's next round.
+  bool warm_start = false;
+  double warm_start_floor = 1e-1;
 };
 
 enum class QpStatus {
@@ -133,6 +138,7 @@ class QpWorkspace {
   std::vector<Eigen::Matrix<double, kQpControls, kQpStates>> sbar_;
   std::vector<Eigen::Matrix<double, kQpStates, 1>> costate_;
   std::vector<double> t_, lambda_, sigma_, lambda_soft_;
+  bool has_solution_ = false;  ///< t_ .. lambda_soft_ hold an optimal solution of these rows
   std::vector<double> dt_, dlambda_, dsigma_, dlambda_soft_;
   std::vector<double> weight_, offset_, soft_q_;
   std::vector<double> dt_aff_, dlambda_aff_, dsigma_aff_, dlambda_soft_aff_;
