@@ -21,10 +21,9 @@ struct FastWorkspace final : LaneChangeWorkspace {
   QpWorkspace qp_workspace;
   std::vector<std::vector<int>> stack;  // mode assignments waiting to be solved
   std::vector<Control> start_controls;
-  long iterations = 0;  // of the interior-point method, for the solution's statistics
-  unsigned needed_bounds = 0;
-  bool warm_start_qp = false;  // start a node QP from the last one's multipliers (fixed modes)  //
-                               // state components whose bounds this round's QPs carry
+  long iterations = 0;         // of the interior-point method, for the solution's statistics
+  unsigned needed_bounds = 0;  // state components whose bounds this round's QPs carry
+  bool warm_start_qp = false;  // start a node QP from the last one's multipliers (fixed modes)
   // Per node, bit m set when lane mode m can hold there at all: the states
   // the round's dynamics, bounds and controls can reach leave the others out.
   std::vector<unsigned> possible_modes;

@@ -11,13 +11,16 @@ using GainMatrix = Eigen::Matrix<double, kQpControls, kQpStates>;
 
 void QpWorkspace::setup(const StructuredQp& qp) {
   const int stages = qp.steps() + 1;
-  const std::vector<int> previous_offsets = row_offset_;
-  row_offset_.assign(stages + 1, 0);
-  for (int k = 0; k < stages; ++k) {
-    row_offset_[k + 1] = row_offset_[k] + static_cast<int>(qp.stages[k].rows.size());
-  }
   // The last solution's multipliers fit this problem only row for row.
-  has_solution_ = has_solution_ && previous_offsets == row_offset_;
+  bool same_rows = row_offset_.size() == static_cast<std::size_t>(stages) + 1;
+  row_offset_.resize(stages + 1);
+  row_offset_[0] = 0;
+  for (int k = 0; k < stages; ++k) {
+    const int next = row_offset_[k] + static_cast<int>(qp.stages[k].rows.size());
+    same_rows = same_rows && row_offset_[k + 1] == next;
+    row_offset_[k + 1] = next;
+  }
+  has_solution_ = has_solution_ && same_rows;
   const std::size_t rows = row_offset_.back();
   single_index_.assign(rows, -1);
   for (int k = 0; k < stages; ++k) {
@@ -150,6 +153,10 @@ struct InteriorPointMethod {
             st.A * ws.w_[k].head<kQpStates>() + st.B * ws.w_[k].tail<kQpControls>() + st.c;
       }
     }
+    if (settings.warm_start && ws.has_solution_) {
+      warm_rows();
+      return;
+    }
     // Every row starts centred, with lambda t (and a soft row's
     // lambda_soft sigma) at settings.initial_complementarity, its slacks at
     // least 1 from their bounds, and a soft row on rho = lambda +
@@ -157,10 +164,6 @@ struct InteriorPointMethod {
     // of the size of rho). A start with lambda = 1 everywhere and a violated
     // soft row's t at 1e-2 took steps of 1e-4 for the first five to eight
     // iterations, until the products had evened out.
-    if (settings.warm_start && ws.has_solution_) {
-      warm_rows();
-      return;
-    }
     const double mu0 = settings.initial_complementarity;
     for_each_row([&](int k, const QpRow& row, int i) {
       const double room = row.d - row_dot(row, i, ws.w_[k]);
