@@ -38,12 +38,14 @@ std::shared_ptr<const lc::learn::StrategyModel> fitted_here() {
   const lc::expert::ExpertPlanner exact(lc::planner::closed_loop_expert(lc::Config{}),
                                         std::make_shared<lc::expert::FastLaneChangeSolver>());
   lc::learn::StrategyRows rows;
+  const double cap = lc::Config{}.traffic_max_speed.value();
+  rows.traffic_speed_cap = cap;
   for (const lc::Scenario& s : sample(kTrainSeed, env_int("LANECHANGE_BENCH_TRAIN", 300))) {
     const lc::expert::ExpertResult r = exact.plan(s);
     if (r.status != lc::expert::PlanStatus::Converged) continue;
     std::vector<int> modes;
     for (const auto& o : r.occupancy) modes.push_back(o ? static_cast<int>(*o) : -1);
-    rows.features.push_back(lc::learn::strategy_features(s));
+    rows.features.push_back(lc::learn::strategy_features(s, cap));
     rows.labels.push_back(lc::learn::strategy_of(modes));
   }
   return std::make_shared<const lc::learn::StrategyModel>(

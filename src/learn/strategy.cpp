@@ -1,10 +1,13 @@
 #include "lanechange/learn/strategy.hpp"
 
 #include <algorithm>
+#include <cmath>
+#include <limits>
 #include <map>
 
 #include "lanechange/error.hpp"
 #include "lanechange/learn/learn_data.hpp"
+#include "lanechange/traffic.hpp"
 
 namespace lanechange::learn {
 
@@ -35,7 +38,7 @@ struct NodeColumns {
 // the horizon, the scenario's behavior. `last_a` is the acceleration applied
 // in the step before (the scene's ego.a means that).
 Eigen::VectorXd node_features(const Eigen::RowVectorXd& z, double last_a, double horizon_left,
-                              int behavior) {
+                              int behavior, double traffic_speed_cap) {
   static const NodeColumns c;
   Scenario scene;
   scene.behavior = static_cast<Behavior>(behavior);
@@ -45,12 +48,12 @@ Eigen::VectorXd node_features(const Eigen::RowVectorXd& z, double last_a, double
     scene.car(static_cast<Car>(i)) = {z(at), z(at + 1), z(at + 2)};
   }
   scene.horizon = horizon_left;
-  return strategy_features(scene);
+  return strategy_features(scene, traffic_speed_cap);
 }
 
 // The rows of one plan (its nodes first to last in `rows`, of PlanNodeTable).
 void add_plan(const LearningData& data, const std::vector<int>& rows, int stride,
-              std::vector<Eigen::VectorXd>& features, std::vector<Strategy>& labels) {
+              StrategyRows& out) {
   static const NodeColumns c;
   const PlanNodeTable& t = data.plan_nodes;
   std::vector<int> modes;
@@ -66,8 +69,9 @@ void add_plan(const LearningData& data, const std::vector<int>& rows, int stride
     const auto& z = t.states.row(rows[static_cast<std::size_t>(k)]);
     const double last_a =
         k == 0 ? z(c.ego_a0) : t.states(rows[static_cast<std::size_t>(k - 1)], c.a);
-    features.push_back(node_features(z, last_a, end_time - z(c.t), behavior));
-    labels.push_back(strategy_of(modes, k));
+    out.features.push_back(
+        node_features(z, last_a, end_time - z(c.t), behavior, out.traffic_speed_cap));
+    out.labels.push_back(strategy_of(modes, k));
   }
 }
 
@@ -102,35 +106,33 @@ namespace {
 constexpr double kGapLookahead = 10.0;
 constexpr double kGapTimeStep = 0.1;
 
-// Where a car is after t s at its acceleration (stopped, not reversing).
-double position_after(const CarState& c, double t) {
-  const double moving = c.a < 0.0 ? std::min(t, -c.v / c.a) : t;
-  return c.x + c.v * moving + 0.5 * c.a * moving * moving;
-}
-
 }  // namespace
 
-double gap_open_time(const Scenario& s) {
+double gap_open_time(const Scenario& s, double traffic_speed_cap) {
   const SafetyMargins d = s.centre_safe_distances();
   const double ahead_needed = d.target.standstill + d.target.time_headway * s.ego.v;
+  // The cars move as the constant-acceleration traffic model moves them
+  // (stopping at 0, held at the cap), so the feature agrees with the scenes.
+  CarState target = s.target;
+  CarState follower = s.follower;
   for (int i = 0; i * kGapTimeStep <= kGapLookahead; ++i) {
     const double t = i * kGapTimeStep;
-    const double ego_x = s.ego.x + s.ego.v * t;
-    const double follower_v = std::max(0.0, s.follower.v + s.follower.a * t);
-    const double behind_needed = d.follower.standstill + d.follower.time_headway * follower_v;
-    if (position_after(s.target, t) - ego_x >= ahead_needed &&
-        ego_x - position_after(s.follower, t) >= behind_needed) {
-      return t;
+    if (i > 0) {
+      advance_constant_accel(target, kGapTimeStep, traffic_speed_cap);
+      advance_constant_accel(follower, kGapTimeStep, traffic_speed_cap);
     }
+    const double ego_x = s.ego.x + s.ego.v * t;
+    const double behind_needed = d.follower.standstill + d.follower.time_headway * follower.v;
+    if (target.x - ego_x >= ahead_needed && ego_x - follower.x >= behind_needed) return t;
   }
   return kGapLookahead;
 }
 
-Eigen::VectorXd strategy_features(const Scenario& s) {
+Eigen::VectorXd strategy_features(const Scenario& s, double traffic_speed_cap) {
   Eigen::VectorXd f(static_cast<Eigen::Index>(strategy_feature_names().size()));
   f << s.ego.y, s.ego.theta, s.ego.v, s.ego.a, s.leader.x - s.ego.x, s.leader.v, s.leader.a,
       s.follower.x - s.ego.x, s.follower.v, s.follower.a, s.target.x - s.ego.x, s.target.v,
-      s.target.a, s.horizon, 0.0, 0.0, 0.0, gap_open_time(s);
+      s.target.a, s.horizon, 0.0, 0.0, 0.0, gap_open_time(s, traffic_speed_cap);
   f(14 + static_cast<Eigen::Index>(s.behavior)) = 1.0;
   return f;
 }
@@ -154,6 +156,8 @@ StrategyRows strategy_rows(const LearningData& data, const std::vector<int>& sce
                            int node_stride) {
   const std::vector<char> member = mask_of(scenarios, data.scenarios.rows());
   StrategyRows out;
+  out.traffic_speed_cap = config_from_json(data.config)
+                              .traffic_max_speed.value_or(std::numeric_limits<double>::infinity());
   const PlanNodeTable& t = data.plan_nodes;
   // Nodes of one plan are consecutive rows of the table.
   for (int r = 0; r < t.rows();) {
@@ -163,7 +167,7 @@ StrategyRows strategy_rows(const LearningData& data, const std::vector<int>& sce
       plan.push_back(r);
     }
     if (member[static_cast<std::size_t>(scenario)] && plan.size() >= 3) {
-      add_plan(data, plan, node_stride, out.features, out.labels);
+      add_plan(data, plan, node_stride, out);
     }
   }
   return out;
@@ -178,6 +182,7 @@ StrategyModel StrategyModel::fit(const StrategyRows& rows, const StrategySetting
   }
   StrategyModel m;
   m.neighbors_ = settings.neighbors;
+  m.traffic_speed_cap_ = rows.traffic_speed_cap;
   Eigen::MatrixXd x(static_cast<Eigen::Index>(features.size()), features[0].size());
   for (std::size_t i = 0; i < features.size(); ++i) {
     x.row(static_cast<Eigen::Index>(i)) = features[i].transpose();
@@ -240,10 +245,14 @@ json StrategyModel::to_json() const {
   std::vector<double> points(points_.data(), points_.data() + points_.size());
   const auto& all = strategy_feature_names();
   const std::vector<std::string> names(all.begin(), all.begin() + points_.rows());
-  return {{"format", kStrategyFormat}, {"features", names},
-          {"neighbors", neighbors_},   {"standardizer", standardizer_.to_json()},
-          {"strategies", strategies_}, {"labels", label_},
-          {"points", points}};
+  json out = {{"format", kStrategyFormat}, {"features", names},
+              {"neighbors", neighbors_},   {"standardizer", standardizer_.to_json()},
+              {"strategies", strategies_}, {"labels", label_},
+              {"points", points}};
+  // JSON has no infinity: no cap is written as null.
+  out["traffic_speed_cap"] =
+      std::isfinite(traffic_speed_cap_) ? json(traffic_speed_cap_) : json(nullptr);
+  return out;
 }
 
 StrategyModel StrategyModel::from_json(const json& j) {
@@ -260,6 +269,13 @@ StrategyModel StrategyModel::from_json(const json& j) {
   }
   StrategyModel m;
   m.neighbors_ = j.at("neighbors").get<int>();
+  // Models from before the cap was recorded computed their features without one.
+  if (j.contains("traffic_speed_cap") && !j.at("traffic_speed_cap").is_null()) {
+    m.traffic_speed_cap_ = j.at("traffic_speed_cap").get<double>();
+    if (!(m.traffic_speed_cap_ > 0.0)) {
+      throw InputError("", "the strategy model's traffic speed cap is not positive");
+    }
+  }
   m.standardizer_ = Standardizer::from_json(j.at("standardizer"));
   m.strategies_ = j.at("strategies").get<std::vector<Strategy>>();
   m.label_ = j.at("labels").get<std::vector<int>>();

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <memory>
 
 #include "lanechange/error.hpp"
@@ -11,6 +12,7 @@
 #include "lanechange/planner/strategy_study.hpp"
 #include "lanechange/sampler.hpp"
 #include "lanechange/sim/simulator.hpp"
+#include "lanechange/traffic.hpp"
 #include "planner/strategy_qp_planner.hpp"
 #include "test_helpers.hpp"
 
@@ -25,6 +27,9 @@ std::shared_ptr<const expert::LaneChangeSolver> fast() {
   return std::make_shared<expert::FastLaneChangeSolver>();
 }
 
+// The traffic speed cap of the default config, which the models here share.
+double default_cap() { return Config{}.traffic_max_speed.value(); }
+
 // The occupancy per node of a plan, as the data sets' lane_mode column has it.
 std::vector<int> lane_modes_of(const ExpertResult& r) {
   std::vector<int> out;
@@ -36,8 +41,11 @@ std::vector<int> lane_modes_of(const ExpertResult& r) {
 std::shared_ptr<const learn::StrategyModel> model_of(const std::vector<Scenario>& scenes,
                                                      const std::vector<learn::Strategy>& labels) {
   learn::StrategyRows rows;
-  for (const Scenario& s : scenes) rows.features.push_back(learn::strategy_features(s));
+  for (const Scenario& s : scenes) {
+    rows.features.push_back(learn::strategy_features(s, default_cap()));
+  }
   rows.labels = labels;
+  rows.traffic_speed_cap = default_cap();
   return std::make_shared<const learn::StrategyModel>(learn::StrategyModel::fit(rows, {3, 0}));
 }
 
@@ -133,12 +141,13 @@ TEST(Strategy, StrategiesStretchAndShrinkToTheHorizon) {
 
 TEST(Strategy, TheGapOpensWhenBothSafeDistancesHold) {
   const Scenario open = testing::open_road_scenario();
-  EXPECT_EQ(learn::gap_open_time(open), 0.0);
-  EXPECT_EQ(learn::gap_open_time(testing::no_gap_scenario()), 10.0);  // never, within 10 s
+  EXPECT_EQ(learn::gap_open_time(open, default_cap()), 0.0);
+  // never, within 10 s
+  EXPECT_EQ(learn::gap_open_time(testing::no_gap_scenario(), default_cap()), 10.0);
   // A target just ahead that pulls away: the gap opens once it is far enough.
   Scenario opening = open;
   opening.target = {5.0, 12.0, 0.0};
-  const double t = learn::gap_open_time(opening);
+  const double t = learn::gap_open_time(opening, default_cap());
   const SafetyMargins d = opening.centre_safe_distances();
   const double needed = d.target.standstill + d.target.time_headway * opening.ego.v;
   const auto ahead = [&opening](double at) {
@@ -147,9 +156,39 @@ TEST(Strategy, TheGapOpensWhenBothSafeDistancesHold) {
   ASSERT_GT(t, 0.0);
   EXPECT_GE(ahead(t), needed);
   EXPECT_LT(ahead(t - 0.1), needed);
-  EXPECT_EQ(learn::strategy_features(opening)(17), t);
+  EXPECT_EQ(learn::strategy_features(opening, default_cap())(17), t);
   ASSERT_EQ(learn::strategy_feature_names().size(), 18U);
   EXPECT_EQ(learn::strategy_feature_names()[17], "gap_open_s");
+}
+
+// The feature moves the cars as the traffic model does: a target that speeds
+// up stops at the cap, so the gap ahead opens later than an uncapped target's.
+TEST(Strategy, TheGapFeatureHoldsTheTrafficSpeedCap) {
+  Scenario opening = testing::open_road_scenario();
+  opening.target = {5.0, opening.ego.v, 2.0};
+  const double cap = opening.ego.v + 1.0;
+  const double capped = learn::gap_open_time(opening, cap);
+  const double free = learn::gap_open_time(opening, std::numeric_limits<double>::infinity());
+  ASSERT_LT(capped, 10.0);
+  EXPECT_GT(capped, free);
+  const SafetyMargins d = opening.centre_safe_distances();
+  const double needed = d.target.standstill + d.target.time_headway * opening.ego.v;
+  const auto ahead = [&opening, cap](double at) {
+    CarState target = opening.target;
+    advance_constant_accel(target, at, cap);
+    return target.x - (opening.ego.x + opening.ego.v * at);
+  };
+  EXPECT_GE(ahead(capped), needed - 1e-9);
+  EXPECT_LT(ahead(capped - 0.1), needed);
+  // A model keeps the cap it was trained with.
+  learn::StrategyRows rows;
+  rows.features = {learn::strategy_features(opening, cap)};
+  rows.labels = {"222"};
+  rows.traffic_speed_cap = cap;
+  const auto saved = learn::StrategyModel::fit(rows, {1, 0}).to_json();
+  EXPECT_EQ(saved.at("traffic_speed_cap").get<double>(), cap);
+  rows.traffic_speed_cap = std::numeric_limits<double>::infinity();
+  EXPECT_TRUE(learn::StrategyModel::fit(rows, {1, 0}).to_json().at("traffic_speed_cap").is_null());
 }
 
 // A model saved before gap_open_s existed holds the 17 leading features: it
@@ -160,7 +199,7 @@ TEST(Strategy, AModelFromBeforeTheGapFeatureStillVotes) {
   far.target.x += 30.0;
   learn::StrategyRows rows;
   for (const Scenario& s : {near, near, far}) {
-    rows.features.push_back(learn::strategy_features(s).head(17));
+    rows.features.push_back(learn::strategy_features(s, default_cap()).head(17));
   }
   rows.labels = {"000", "000", "222"};
   const auto old = learn::StrategyModel::fit(rows, {3, 0});

@@ -7,6 +7,7 @@
 // the closed loop, their later nodes as scenes of their own with the rest of
 // the plan's strategy (a plan from there would keep it, up to re-linearizing).
 #include <Eigen/Dense>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <string_view>
@@ -39,20 +40,26 @@ struct StrategySettings {
 /// Relative gaps make a scene mid-manoeuvre look like a start. New features
 /// go at the end: a model trained before one was added uses the leading ones.
 [[nodiscard]] const std::vector<std::string>& strategy_feature_names();
-[[nodiscard]] Eigen::VectorXd strategy_features(const Scenario& scene);
+/// `traffic_speed_cap` (m/s, +infinity for none) is the traffic model's
+/// (Config::traffic_max_speed), for gap_open_time().
+[[nodiscard]] Eigen::VectorXd strategy_features(const Scenario& scene, double traffic_speed_cap);
 
 /// The first time (s, on a 0.1 s grid, at most 10) at which an ego that keeps
 /// its speed would be at the centre safe distances behind the target car and
-/// ahead of the follower, each car keeping its acceleration. The gaps alone
+/// ahead of the follower, each car keeping its acceleration as the
+/// constant-acceleration traffic model does (advance_constant_accel: a car
+/// stops at 0 and holds `traffic_speed_cap`). The gaps alone
 /// do not tell the vote when a lane change becomes possible: most scenes
 /// where no top-k strategy held changed lanes late, while the neighbours
 /// changed early (docs/strategy.md).
-[[nodiscard]] double gap_open_time(const Scenario& scene);
+[[nodiscard]] double gap_open_time(const Scenario& scene, double traffic_speed_cap);
 
 /// Training rows: scenes and the strategy their plan follows from there.
 struct StrategyRows {
   std::vector<Eigen::VectorXd> features;
   std::vector<Strategy> labels;
+  /// The traffic speed cap the features were computed with.
+  double traffic_speed_cap = std::numeric_limits<double>::infinity();
 };
 
 /// The rows of the converged plans of `scenarios` (rows of ScenarioTable):
@@ -71,7 +78,7 @@ class StrategyModel {
   /// inverse-distance vote).
   [[nodiscard]] std::vector<Strategy> predict(const Eigen::VectorXd& features, int count) const;
   [[nodiscard]] std::vector<Strategy> predict(const Scenario& scene, int count) const {
-    return predict(strategy_features(scene).head(points_.rows()), count);
+    return predict(strategy_features(scene, traffic_speed_cap_).head(points_.rows()), count);
   }
   /// The leading strategy_feature_names() it was trained on.
   [[nodiscard]] int features() const { return static_cast<int>(points_.rows()); }
@@ -80,6 +87,8 @@ class StrategyModel {
 
  private:
   int neighbors_ = 15;
+  /// Its rows' (StrategyRows::traffic_speed_cap): a scene is featured alike.
+  double traffic_speed_cap_ = std::numeric_limits<double>::infinity();
   Standardizer standardizer_;
   Eigen::MatrixXd points_;  ///< standardized features, one column per row
   Eigen::VectorXd norms_;   ///< squared norm of each column of points_
