@@ -289,6 +289,11 @@ struct StrategyQpSettings {
   /// Screen with rough QPs (FixedModeSettings::rough): about half the
   /// iterations, and only the ranking depends on them.
   bool rough_screen = true;
+  /// Where a plan has no path to start from (open loop, a rollout's first
+  /// step), start each candidate's rounds from the warm start with its lane
+  /// change timed to the candidate's switch nodes (warm_start_for_modes)
+  /// rather than the expert's, timed to the middle of the horizon.
+  bool timed_warm_start = true;
   /// Without the screen: follow the first candidate that holds in the
   /// model's order (CoCo) instead of the cheapest of all (MLOPT).
   bool first_feasible = false;

@@ -39,7 +39,38 @@ void fill_controls(Iterate& path, double dt) {
   }
 }
 
-Iterate quintic_warm_start(const Scenario& s, const Config& c, const TrafficPrediction& p) {
+// The ego's lateral motion in a warm start: a quintic from y0 to y1 with
+// zero end rates over [start, start + duration], flat outside.
+struct LateralMove {
+  double y0 = 0.0, y1 = 0.0, start = 0.0, duration = 1.0;
+  [[nodiscard]] double fraction(double t) const {
+    const double tau = std::clamp((t - start) / duration, 0.0, 1.0);
+    return tau * tau * tau * (10.0 + tau * (-15.0 + 6.0 * tau));
+  }
+  [[nodiscard]] double rate(double t) const {
+    const double tau = (t - start) / duration;
+    if (tau <= 0.0 || tau >= 1.0) return 0.0;
+    return (y1 - y0) * 30.0 * tau * tau * (1.0 - tau) * (1.0 - tau) / duration;
+  }
+  [[nodiscard]] double value(double t) const { return y0 + (y1 - y0) * fraction(t); }
+};
+
+// Where on [0, 1] the smooth-step quintic reaches `level` (0 to 1).
+double quintic_time_at(double level) {
+  const LateralMove unit{0.0, 1.0, 0.0, 1.0};
+  double lo = 0.0, hi = 1.0;
+  for (int i = 0; i < 50; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    (unit.fraction(mid) < level ? lo : hi) = mid;
+  }
+  return 0.5 * (lo + hi);
+}
+
+// The warm start's x and speed (a quintic toward a place behind the target)
+// with the given lateral motion (value and rate in t).
+template <class Lateral>
+Iterate quintic_path(const Scenario& s, const Config& c, const TrafficPrediction& p,
+                     const Lateral& lateral) {
   const double T = s.horizon;
   const double dt = T / s.steps;
   const CarTrack& target = p.car(Car::Target);
@@ -55,16 +86,20 @@ Iterate quintic_warm_start(const Scenario& s, const Config& c, const TrafficPred
   aim = std::max(aim, s.ego.x + 0.5 * (s.ego.v + end_speed) * T * 0.25);
   const Quintic x(s.ego.x, s.ego.v * std::cos(s.ego.theta), s.ego.a, aim, end_speed, target.a[end],
                   T);
-  const Quintic y(s.ego.y, s.ego.v * std::sin(s.ego.theta), 0.0, s.lane_width, 0.0, 0.0, T);
   Iterate path;
   for (int k = 0; k <= s.steps; ++k) {
     const double t = k * dt;
     const double vx = std::max(x.rate(t), 0.1);
-    const double vy = y.rate(t);
-    path.states.emplace_back(x.value(t), y.value(t), std::hypot(vx, vy), std::atan2(vy, vx));
+    const double vy = lateral.rate(t);
+    path.states.emplace_back(x.value(t), lateral.value(t), std::hypot(vx, vy), std::atan2(vy, vx));
   }
   fill_controls(path, dt);
   return path;
+}
+
+Iterate quintic_warm_start(const Scenario& s, const Config& c, const TrafficPrediction& p) {
+  const Quintic y(s.ego.y, s.ego.v * std::sin(s.ego.theta), 0.0, s.lane_width, 0.0, 0.0, s.horizon);
+  return quintic_path(s, c, p, y);
 }
 
 // The authors' code: x = v0 t, a quintic y with zero end rates, v linear to
@@ -84,7 +119,50 @@ Iterate authors_warm_start(const Scenario& s, const TrafficPrediction& p) {
   return path;
 }
 
+// The lateral move whose body first touches the line at node `touches` and
+// is first wholly across it at node `across` (either -1: never).
+LateralMove move_timed_to(const Scenario& s, int touches, int across) {
+  const double dt = s.horizon / s.steps;
+  LateralMove move{s.ego.y, s.lane_width, 0.0, s.horizon};
+  if (touches < 0) {
+    move.y1 = 0.0;  // back to (or along) the ego lane's centre
+    return move;
+  }
+  if (across < 0) across = s.steps + 2;  // past the horizon
+  const double span = move.y1 - move.y0;
+  const double line = 0.5 * s.lane_width;
+  const double half = 0.5 * s.vehicle.width;
+  const double tau_touch = quintic_time_at(std::clamp((line - half - move.y0) / span, 0.0, 1.0));
+  const double tau_across = quintic_time_at(std::clamp((line + half - move.y0) / span, 0.0, 1.0));
+  const double gap = std::max(tau_across - tau_touch, 0.05);
+  move.duration = std::max((across - touches) * dt / gap, 2.0 * dt);
+  move.start = touches * dt - tau_touch * move.duration;
+  return move;
+}
+
 }  // namespace
+
+Iterate warm_start_for_modes(const Scenario& scenario, const Config& config,
+                             const TrafficPrediction& prediction, const std::vector<int>& modes) {
+  const LaneRule rule = config.expert.lane_rule;
+  const int ego_lane = lane_mode_index(rule, LaneOccupancy::EgoLane);
+  const int target_lane = lane_mode_index(rule, LaneOccupancy::TargetLane);
+  int touches = -1, across = -1;
+  for (int k = 1; k < static_cast<int>(modes.size()); ++k) {
+    const int m = modes[static_cast<std::size_t>(k)];
+    if (m < 0) continue;
+    if (touches < 0 && m != ego_lane) touches = k;
+    if (across < 0 && m == target_lane) across = k;
+  }
+  // Under the either-or rule a node is in one lane or the other.
+  if (touches >= 0 && across < 0 && rule == LaneRule::EitherOr) across = touches;
+  Iterate path =
+      quintic_path(scenario, config, prediction, move_timed_to(scenario, touches, across));
+  // The flat start would give node 0 no heading; it has the ego's.
+  path.states.front() = State(scenario.ego.x, scenario.ego.y, scenario.ego.v, scenario.ego.theta);
+  fill_controls(path, scenario.horizon / scenario.steps);
+  return path;
+}
 
 Iterate warm_start(const Scenario& scenario, const Config& config,
                    const TrafficPrediction& prediction) {

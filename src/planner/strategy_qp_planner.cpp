@@ -64,6 +64,23 @@ CandidateOutcome StrategyQpPlanner::solve_candidate(const Scenario& scene,
   return out;
 }
 
+void StrategyQpPlanner::time_warm_starts(const Scenario& scene, const expert::PlanHints& hints,
+                                         std::vector<Candidate>& list) const {
+  const auto nodes = static_cast<std::size_t>(scene.steps) + 1;
+  const bool path_fits = hints.path != nullptr && hints.path->states.size() == nodes;
+  if (!config_.strategy_qp.timed_warm_start || path_fits || list.empty()) return;
+  // The expert's warm start changes lanes in the middle of the horizon; with
+  // the modes fixed, rounds that start from a change at the candidate's own
+  // switch nodes linearize near where they end.
+  const Config config = effective_config(config_, scene);
+  const double dt = scene.horizon / scene.steps;
+  const TrafficPrediction prediction =
+      predict_traffic(scene, config, scene.steps + config.expert.prediction_lead_steps, dt);
+  for (Candidate& c : list) {
+    c.start = expert::warm_start_for_modes(scene, config, prediction, c.modes);
+  }
+}
+
 std::vector<StrategyQpPlanner::Candidate> StrategyQpPlanner::candidates_of(
     const Scenario& scene, const expert::PlanHints& hints) const {
   const LaneRule rule = effective_config(config_, scene).expert.lane_rule;
@@ -71,14 +88,17 @@ std::vector<StrategyQpPlanner::Candidate> StrategyQpPlanner::candidates_of(
   // The last plan's modes (closed loop) come first: they were the optimum a
   // step ago, and keep the manoeuvre steady.
   const auto nodes = static_cast<std::size_t>(scene.steps) + 1;
-  if (hints.modes != nullptr && hints.modes->size() == nodes) list.push_back({{}, *hints.modes});
+  if (hints.modes != nullptr && hints.modes->size() == nodes) {
+    list.push_back({{}, *hints.modes, {}});
+  }
   for (learn::Strategy& s : model_->predict(scene, config_.strategy_qp.candidates)) {
     std::vector<int> modes = modes_of_strategy(s, scene.steps, rule);
     // Two strategies may agree on this horizon: one solve is enough.
     const bool seen = std::any_of(list.begin(), list.end(),
                                   [&modes](const Candidate& c) { return c.modes == modes; });
-    if (!seen) list.push_back({std::move(s), std::move(modes)});
+    if (!seen) list.push_back({std::move(s), std::move(modes), {}});
   }
+  time_warm_starts(scene, hints, list);
   return list;
 }
 
@@ -104,7 +124,8 @@ void StrategyQpPlanner::follow_in_order(const Scenario& scene, const expert::Pla
                                         StrategyPlan& out, std::vector<int>& rescued_hint) const {
   expert::ExpertResult plan;
   for (const Candidate& c : list) {
-    CandidateOutcome o = solve_candidate(scene, c.modes, limits, hints, plan);
+    CandidateOutcome o =
+        solve_candidate(scene, c.modes, limits, {c.first_point(hints), hints.modes}, plan);
     o.strategy = c.strategy;
     const bool taken = take_candidate(o, c.modes, plan, out, rescued_hint);
     out.candidates.push_back(std::move(o));
@@ -119,11 +140,16 @@ void StrategyQpPlanner::follow_screened(const Scenario& scene, const expert::Pla
                                         const std::vector<Candidate>& list, StrategyPlan& out,
                                         std::vector<int>& rescued_hint) const {
   const auto start = Clock::now();
-  const expert::LinearizedRound first = fixed_.first_round(scene, hints);
+  expert::LinearizedRound first;
   const auto workspace = screen_solver_.make_workspace();
   std::vector<expert::LaneChangeSolution> screens;
   std::vector<std::size_t> order;
   for (const Candidate& c : list) {
+    // Candidates with a start of their own each have their linearization;
+    // the others share the plan's.
+    if (first.point.states.empty() || !c.start.states.empty()) {
+      first = fixed_.first_round(scene, {c.first_point(hints), nullptr});
+    }
     screens.push_back(
         screen_solver_.solve(first.qp, {}, {workspace.get(), &c.modes, &first.point.controls}));
     out.qp_iterations += screens.back().qp_iterations;
@@ -187,9 +213,11 @@ StrategyPlan StrategyQpPlanner::plan(const Scenario& scene, const expert::PlanLi
 CandidateOutcome StrategyQpPlanner::assess_strategy(const Scenario& scene,
                                                     const learn::Strategy& strategy) const {
   const LaneRule rule = effective_config(config_, scene).expert.lane_rule;
+  std::vector<Candidate> one{{strategy, modes_of_strategy(strategy, scene.steps, rule), {}}};
+  time_warm_starts(scene, {}, one);
   expert::ExpertResult plan;
   CandidateOutcome o =
-      solve_candidate(scene, modes_of_strategy(strategy, scene.steps, rule), {}, {}, plan);
+      solve_candidate(scene, one.front().modes, {}, {one.front().first_point({}), nullptr}, plan);
   o.strategy = strategy;
   o.rounds_run = true;
   return o;

@@ -77,7 +77,17 @@ class StrategyQpPlanner final : public ClosedLoopPlanner {
   struct Candidate {
     learn::Strategy strategy;
     std::vector<int> modes;
+    /// Its first linearization point when the plan has no path to start
+    /// from (StrategyQpSettings::timed_warm_start), else empty.
+    expert::Iterate start;
+    /// The path its rounds start from: its own, else the plan's hint.
+    [[nodiscard]] const expert::Iterate* first_point(const expert::PlanHints& hints) const {
+      return start.states.empty() ? hints.path : &start;
+    }
   };
+  /// Gives each candidate its timed warm start where the plan has no path.
+  void time_warm_starts(const Scenario& scene, const expert::PlanHints& hints,
+                        std::vector<Candidate>& list) const;
   /// The predicted strategies (after the last plan's modes, in closed loop),
   /// each once on this horizon.
   [[nodiscard]] std::vector<Candidate> candidates_of(const Scenario& scene,

@@ -79,6 +79,41 @@ TEST(Formulation, WarmStartMeetsItsBoundaryConditions) {
               1e-6);
 }
 
+// Timed to lane modes, the warm start's body first touches the line at the
+// first node out of the ego lane and is first wholly across at the first
+// node in the target lane, and it moves as the plain warm start does in x.
+TEST(Formulation, WarmStartTimedToModesCrossesAtTheirSwitchNodes) {
+  const Scenario s = open_road_scenario();
+  const Config config;
+  const auto prediction = predict_traffic(s, config, s.steps, s.horizon / s.steps);
+  const int touches = s.steps / 2 + 3;
+  const int across = touches + 6;
+  std::vector<int> modes(static_cast<std::size_t>(s.steps) + 1, 0);
+  modes[0] = -1;
+  for (int k = touches; k <= s.steps; ++k) modes[static_cast<std::size_t>(k)] = k < across ? 1 : 2;
+  const Iterate w = warm_start_for_modes(s, config, prediction, modes);
+  ASSERT_EQ(static_cast<int>(w.states.size()), s.steps + 1);
+  const double line = 0.5 * s.lane_width;
+  const double half = 0.5 * s.vehicle.width;
+  const auto y = [&w](int k) { return w.states[static_cast<std::size_t>(k)][kY]; };
+  EXPECT_LT(y(touches - 1) + half, line);
+  EXPECT_GE(y(touches) + half, line - 1e-6);
+  EXPECT_LT(y(across - 1) - half, line);
+  EXPECT_GE(y(across) - half, line - 1e-6);
+  EXPECT_NEAR(y(0), s.ego.y, 1e-12);
+  EXPECT_NEAR(w.states.front()[kTheta], s.ego.theta, 1e-12);
+  const Iterate plain = warm_start(s, config, prediction);
+  EXPECT_NEAR(w.states.back()[kX], plain.states.back()[kX], 1e-9);
+  // Modes that never leave the ego lane keep it.
+  const std::vector<int> stay(static_cast<std::size_t>(s.steps) + 1, 0);
+  const Iterate kept = warm_start_for_modes(s, config, prediction, stay);
+  for (const State& z : kept.states) EXPECT_LT(z[kY] + half, line);
+  // The controls move the states.
+  ASSERT_EQ(w.controls.size(), w.states.size() - 1);
+  const double dt = s.horizon / s.steps;
+  EXPECT_NEAR(w.states[1][kTheta], w.states[0][kTheta] + dt * w.controls[0][1], 1e-9);
+}
+
 // The fast solver and Bonmin on the same first-round MIQPs, small enough for
 // the reference to take seconds: N = 10 with the either-or rule (20
 // binaries), N = 6 with the footprint rule (18 binaries; Bonmin's B-BB needs

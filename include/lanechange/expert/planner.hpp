@@ -72,6 +72,15 @@ struct PlanHints {
 [[nodiscard]] Iterate warm_start(const Scenario& scenario, const Config& config,
                                  const TrafficPrediction& prediction);
 
+/// The quintic warm start with its lane change timed to `modes` (lane modes
+/// per node, as PlanHints::modes): the body first touches the line at the
+/// first node whose mode leaves the ego lane and is first wholly across at
+/// the first node in the target lane. Rounds with those modes fixed then start
+/// near where they end, not from a change timed to the middle of the horizon.
+[[nodiscard]] Iterate warm_start_for_modes(const Scenario& scenario, const Config& config,
+                                           const TrafficPrediction& prediction,
+                                           const std::vector<int>& modes);
+
 /// A round's MIQP and the point it is linearized about.
 struct LinearizedRound {
   Iterate point;
