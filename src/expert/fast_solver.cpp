@@ -262,7 +262,11 @@ NodeOutcome solve_node_with(const LaneChangeQp& qp, const std::vector<int>& mode
   const QpResult r = solve_structured_qp(ws.node, ws.qp_workspace, settings);
   NodeOutcome out;
   out.iterations = r.iterations;
-  if (r.status == QpStatus::Cutoff) return out;
+  if (r.status == QpStatus::Cutoff) {
+    out.cut_off = true;
+    out.objective = r.lower_bound + qp.objective_constant();
+    return out;
+  }
   if (r.status == QpStatus::NumericalError || r.status == QpStatus::IterationLimit) {
     out.numerical_failure = true;
     return out;

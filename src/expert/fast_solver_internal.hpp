@@ -37,6 +37,7 @@ struct NodeOutcome {
   bool feasible = false;
   bool coarse = false;  // a point good enough to branch on, not a solution
   bool numerical_failure = false;
+  bool cut_off = false;  // its lower bound passed the cutoff: objective holds that bound
   int iterations = 0;
   double objective = kInfinity;
   Iterate path;

@@ -40,7 +40,7 @@ std::unique_ptr<LaneChangeWorkspace> FixedModeLaneChangeSolver::make_workspace()
 }
 
 LaneChangeSolution FixedModeLaneChangeSolver::solve(const LaneChangeQp& qp,
-                                                    const MiqpSettings& /*settings*/,
+                                                    const MiqpSettings& settings,
                                                     const SolveHints& hints) const {
   const auto start = std::chrono::steady_clock::now();
   LaneChangeSolution out;
@@ -69,12 +69,18 @@ LaneChangeSolution FixedModeLaneChangeSolver::solve(const LaneChangeQp& qp,
   std::vector<int> modes = *hints.modes;
   modes[0] = detail::kFreeMode;
   detail::NodeOutcome node = detail::solve_node(
-      qp, modes, ws, kInfinity,
+      qp, modes, ws, settings.objective_cutoff,
       settings_.rough ? detail::NodePrecision::Rough : detail::NodePrecision::Exact);
   out.nodes = 1;
   out.qp_iterations = ws.iterations;
   out.solve_ms =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  if (node.cut_off) {
+    out.status = MiqpStatus::Cutoff;
+    out.objective = node.objective;
+    out.message = "no point is cheaper than the cutoff";
+    return out;
+  }
   if (!node.feasible) {
     out.status = node.numerical_failure ? MiqpStatus::NumericalError : MiqpStatus::Infeasible;
     out.message =

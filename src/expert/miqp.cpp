@@ -139,6 +139,7 @@ std::string_view to_string(MiqpStatus status) {
     case MiqpStatus::NodeLimit: return "NodeLimit";
     case MiqpStatus::NumericalError: return "NumericalError";
     case MiqpStatus::InvalidProblem: return "InvalidProblem";
+    case MiqpStatus::Cutoff: return "Cutoff";
   }
   return "Unknown";
 }

@@ -144,20 +144,29 @@ void StrategyQpPlanner::follow_screened(const Scenario& scene, const expert::Pla
   const auto workspace = screen_solver_.make_workspace();
   std::vector<expert::LaneChangeSolution> screens;
   std::vector<std::size_t> order;
+  double best_screen = expert::kInfinity;
   for (const Candidate& c : list) {
     // Candidates with a start of their own each have their linearization;
     // the others share the plan's.
     if (first.point.states.empty() || !c.start.states.empty()) {
       first = fixed_.first_round(scene, {c.first_point(hints), nullptr});
     }
-    screens.push_back(
-        screen_solver_.solve(first.qp, {}, {workspace.get(), &c.modes, &first.point.controls}));
+    // A candidate proven dearer than the best so far ranks after it: the
+    // bound that proves it is enough, and the rest of its QP is saved.
+    expert::MiqpSettings screen_settings;
+    if (config_.strategy_qp.screen_cutoff) screen_settings.objective_cutoff = best_screen;
+    screens.push_back(screen_solver_.solve(first.qp, screen_settings,
+                                           {workspace.get(), &c.modes, &first.point.controls}));
     out.qp_iterations += screens.back().qp_iterations;
     CandidateOutcome o;
     o.strategy = c.strategy;
-    if (screens.back().status == expert::MiqpStatus::Optimal) {
+    const expert::MiqpStatus status = screens.back().status;
+    if (status == expert::MiqpStatus::Optimal || status == expert::MiqpStatus::Cutoff) {
       o.screen_objective = screens.back().objective;
       order.push_back(out.candidates.size());
+      if (status == expert::MiqpStatus::Optimal) {
+        best_screen = std::min(best_screen, o.screen_objective);
+      }
     } else {
       // The rounds would stop at this very QP.
       o.status = expert::PlanStatus::Infeasible;

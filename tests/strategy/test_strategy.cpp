@@ -96,6 +96,22 @@ TEST(Strategy, AStrategyFromAnExactPlanGivesBackItsCost) {
     const auto reused = fixed.solve(qp, {}, {workspace.get(), &best.modes, nullptr});
     ASSERT_EQ(reused.status, expert::MiqpStatus::Optimal);
     EXPECT_NEAR(reused.objective, best.objective, 1e-6 * (1.0 + std::abs(best.objective)));
+    // A cutoff under the optimum stops the solve at a bound between the two,
+    // sooner; one above it changes nothing.
+    const double margin = 0.1 * (1.0 + std::abs(best.objective));
+    expert::MiqpSettings below;
+    below.objective_cutoff = best.objective - margin;
+    const auto cut = fixed.solve(qp, below, {nullptr, &best.modes, nullptr});
+    ASSERT_EQ(cut.status, expert::MiqpStatus::Cutoff) << cut.message;
+    EXPECT_GE(cut.objective, below.objective_cutoff);
+    EXPECT_LE(cut.objective, best.objective + 1e-6 * (1.0 + std::abs(best.objective)));
+    EXPECT_FALSE(cut.has_solution());
+    EXPECT_LT(cut.qp_iterations, one.qp_iterations);
+    expert::MiqpSettings above;
+    above.objective_cutoff = best.objective + margin;
+    const auto kept = fixed.solve(qp, above, {nullptr, &best.modes, nullptr});
+    ASSERT_EQ(kept.status, expert::MiqpStatus::Optimal);
+    EXPECT_NEAR(kept.objective, one.objective, 1e-6 * (1.0 + std::abs(best.objective)));
     // The screen's rough solve stops early, near the optimum.
     const auto rough = expert::FixedModeLaneChangeSolver({.rough = true})
                            .solve(qp, {}, {nullptr, &best.modes, nullptr});
@@ -280,8 +296,8 @@ TEST(Strategy, TheScreenRunsTheRoundsInTheOrderOfTheFirstQpsCost) {
   const learn::Strategy truth = learn::strategy_of(lane_modes_of(exact));
   const std::vector<learn::Strategy> labels = {"2", "00000" + truth, truth, "0000000000" + truth};
   const auto model = model_of({s, s, s, s}, labels);
-  ASSERT_TRUE(config.strategy_qp.screen);  // the default
-  config.strategy_qp.screen_keep = 1;      // the first candidate that holds is followed
+  ASSERT_TRUE(config.strategy_qp.screen);        // the default
+  ASSERT_EQ(config.strategy_qp.screen_keep, 1);  // the first candidate that holds is followed
   const planner::StrategyPlan screened = planner::StrategyQpPlanner(config, model).plan(s);
   ASSERT_GE(screened.chosen, 0);
   const auto& chosen = screened.candidates[static_cast<std::size_t>(screened.chosen)];

@@ -50,6 +50,9 @@ enum class MiqpStatus {
   NodeLimit,       ///< stopped by the node limit; x is the best point found, if any
   NumericalError,  ///< the back-end failed; message says why
   InvalidProblem,  ///< check() failed; nothing was solved
+  /// Stopped once its lower bound passed MiqpSettings::objective_cutoff; the
+  /// objective is that bound (no point is given).
+  Cutoff,
 };
 
 [[nodiscard]] std::string_view to_string(MiqpStatus status);
@@ -61,6 +64,10 @@ struct MiqpSettings {
   double relative_gap = 1e-9;
   double integer_tolerance = 1e-6;
   double feasibility_tolerance = 1e-8;  ///< of the continuous relaxations
+  /// A solve may stop (status Cutoff) once it proves no point is cheaper
+  /// than this: a caller who holds a better answer already. Honoured by the
+  /// fixed-mode solver; the searches ignore it.
+  double objective_cutoff = kInfinity;
   bool verbose = false;
 };
 
