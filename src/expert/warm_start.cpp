@@ -130,6 +130,8 @@ LateralMove move_timed_to(const Scenario& s, int touches, int across) {
   }
   if (across < 0) across = s.steps + 2;  // past the horizon
   const double span = move.y1 - move.y0;
+  // Already at (or past) the target lane's centre: nothing to time.
+  if (span <= 1e-6) return move;
   const double line = 0.5 * s.lane_width;
   const double half = 0.5 * s.vehicle.width;
   const double tau_touch = quintic_time_at(std::clamp((line - half - move.y0) / span, 0.0, 1.0));

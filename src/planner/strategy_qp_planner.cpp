@@ -181,7 +181,10 @@ void StrategyQpPlanner::follow_screened(const Scenario& scene, const expert::Pla
   int held = 0;
   for (std::size_t i : order) {
     // The rounds go on from the screened solution: it is the first round's.
-    const expert::PlanHints from_screen{&screens[i].path, nullptr};
+    // A candidate cut off in the screen has none, and starts where its
+    // screen did.
+    const expert::PlanHints from_screen{
+        screens[i].has_solution() ? &screens[i].path : list[i].first_point(hints), nullptr};
     CandidateOutcome& o = out.candidates[i];
     const std::string strategy = o.strategy;
     const double screen_objective = o.screen_objective;
