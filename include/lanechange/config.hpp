@@ -283,10 +283,11 @@ struct StrategyQpSettings {
   /// converges collision-free: about one candidate's rounds per plan.
   bool screen = true;
   /// With the screen: the rounds run until this many candidates converged
-  /// collision-free, and the cheapest of them is followed. 1 since the
-  /// timed warm starts (stop 24): a median cost 1.007 of the optimum, about
-  /// 35% faster than 2 (1.004); docs/strategy.md.
-  int screen_keep = 1;
+  /// collision-free, and the cheapest of them is followed. 1 is about 35%
+  /// faster per plan (a median cost 1.007 of the optimum against 1.004-1.006)
+  /// but drove into 2 at-fault collisions in 500 closed-loop rollouts where 2
+  /// drove into none (docs/strategy.md, stop 24).
+  int screen_keep = 2;
   /// Screen with rough QPs (FixedModeSettings::rough): about half the
   /// iterations, and only the ranking depends on them.
   bool rough_screen = true;

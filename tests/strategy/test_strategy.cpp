@@ -296,8 +296,8 @@ TEST(Strategy, TheScreenRunsTheRoundsInTheOrderOfTheFirstQpsCost) {
   const learn::Strategy truth = learn::strategy_of(lane_modes_of(exact));
   const std::vector<learn::Strategy> labels = {"2", "00000" + truth, truth, "0000000000" + truth};
   const auto model = model_of({s, s, s, s}, labels);
-  ASSERT_TRUE(config.strategy_qp.screen);        // the default
-  ASSERT_EQ(config.strategy_qp.screen_keep, 1);  // the first candidate that holds is followed
+  ASSERT_TRUE(config.strategy_qp.screen);  // the default
+  config.strategy_qp.screen_keep = 1;      // the first candidate that holds is followed
   const planner::StrategyPlan screened = planner::StrategyQpPlanner(config, model).plan(s);
   ASSERT_GE(screened.chosen, 0);
   const auto& chosen = screened.candidates[static_cast<std::size_t>(screened.chosen)];
