@@ -39,35 +39,40 @@ void fill_controls(Iterate& path, double dt) {
   }
 }
 
-// The ego's lateral motion in a warm start: a quintic from y0 to y1 with
-// zero end rates over [start, start + duration], flat outside.
-struct LateralMove {
-  double y0 = 0.0, y1 = 0.0, start = 0.0, duration = 1.0;
-  [[nodiscard]] double fraction(double t) const {
-    const double tau = std::clamp((t - start) / duration, 0.0, 1.0);
-    return tau * tau * tau * (10.0 + tau * (-15.0 + 6.0 * tau));
+// The ego's lateral motion in a warm start: the quintic from y0 to y1 with
+// zero end rates and accelerations over [start, start + duration], flat
+// outside.
+class LateralMove {
+ public:
+  LateralMove(double y0, double y1, double start, double duration)
+      : shape_(y0, 0.0, 0.0, y1, 0.0, 0.0, duration), start_(start), duration_(duration) {}
+  [[nodiscard]] double value(double t) const {
+    return shape_.value(std::clamp(t - start_, 0.0, duration_));
   }
   [[nodiscard]] double rate(double t) const {
-    const double tau = (t - start) / duration;
-    if (tau <= 0.0 || tau >= 1.0) return 0.0;
-    return (y1 - y0) * 30.0 * tau * tau * (1.0 - tau) * (1.0 - tau) / duration;
+    const double s = t - start_;
+    return s <= 0.0 || s >= duration_ ? 0.0 : shape_.rate(s);
   }
-  [[nodiscard]] double value(double t) const { return y0 + (y1 - y0) * fraction(t); }
+
+ private:
+  Quintic shape_;
+  double start_, duration_;
 };
 
-// Where on [0, 1] the smooth-step quintic reaches `level` (0 to 1).
+// Where on [0, 1] the smooth-step quintic from 0 to 1 reaches `level`.
 double quintic_time_at(double level) {
-  const LateralMove unit{0.0, 1.0, 0.0, 1.0};
+  const Quintic unit(0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 1.0);
   double lo = 0.0, hi = 1.0;
   for (int i = 0; i < 50; ++i) {
     const double mid = 0.5 * (lo + hi);
-    (unit.fraction(mid) < level ? lo : hi) = mid;
+    (unit.value(mid) < level ? lo : hi) = mid;
   }
   return 0.5 * (lo + hi);
 }
 
-// The warm start's x and speed (a quintic toward a place behind the target)
-// with the given lateral motion (value and rate in t).
+// The warm start's states: x and speed from a quintic toward a place behind
+// the target, with the given lateral motion (value and rate in t). The
+// caller fills the controls once its states are final.
 template <class Lateral>
 Iterate quintic_path(const Scenario& s, const Config& c, const TrafficPrediction& p,
                      const Lateral& lateral) {
@@ -93,13 +98,14 @@ Iterate quintic_path(const Scenario& s, const Config& c, const TrafficPrediction
     const double vy = lateral.rate(t);
     path.states.emplace_back(x.value(t), lateral.value(t), std::hypot(vx, vy), std::atan2(vy, vx));
   }
-  fill_controls(path, dt);
   return path;
 }
 
 Iterate quintic_warm_start(const Scenario& s, const Config& c, const TrafficPrediction& p) {
   const Quintic y(s.ego.y, s.ego.v * std::sin(s.ego.theta), 0.0, s.lane_width, 0.0, 0.0, s.horizon);
-  return quintic_path(s, c, p, y);
+  Iterate path = quintic_path(s, c, p, y);
+  fill_controls(path, s.horizon / s.steps);
+  return path;
 }
 
 // The authors' code: x = v0 t, a quintic y with zero end rates, v linear to
@@ -122,24 +128,21 @@ Iterate authors_warm_start(const Scenario& s, const TrafficPrediction& p) {
 // The lateral move whose body first touches the line at node `touches` and
 // is first wholly across it at node `across` (either -1: never).
 LateralMove move_timed_to(const Scenario& s, int touches, int across) {
-  const double dt = s.horizon / s.steps;
-  LateralMove move{s.ego.y, s.lane_width, 0.0, s.horizon};
-  if (touches < 0) {
-    move.y1 = 0.0;  // back to (or along) the ego lane's centre
-    return move;
-  }
-  if (across < 0) across = s.steps + 2;  // past the horizon
-  const double span = move.y1 - move.y0;
+  const double y0 = s.ego.y;
+  // No lane change: back to (or along) the ego lane's centre.
+  if (touches < 0) return {y0, 0.0, 0.0, s.horizon};
+  const double span = s.lane_width - y0;
   // Already at (or past) the target lane's centre: nothing to time.
-  if (span <= 1e-6) return move;
+  if (span <= 1e-6) return {y0, s.lane_width, 0.0, s.horizon};
+  if (across < 0) across = s.steps + 2;  // past the horizon
+  const double dt = s.horizon / s.steps;
   const double line = 0.5 * s.lane_width;
   const double half = 0.5 * s.vehicle.width;
-  const double tau_touch = quintic_time_at(std::clamp((line - half - move.y0) / span, 0.0, 1.0));
-  const double tau_across = quintic_time_at(std::clamp((line + half - move.y0) / span, 0.0, 1.0));
+  const double tau_touch = quintic_time_at(std::clamp((line - half - y0) / span, 0.0, 1.0));
+  const double tau_across = quintic_time_at(std::clamp((line + half - y0) / span, 0.0, 1.0));
   const double gap = std::max(tau_across - tau_touch, 0.05);
-  move.duration = std::max((across - touches) * dt / gap, 2.0 * dt);
-  move.start = touches * dt - tau_touch * move.duration;
-  return move;
+  const double duration = std::max((across - touches) * dt / gap, 2.0 * dt);
+  return {y0, s.lane_width, touches * dt - tau_touch * duration, duration};
 }
 
 }  // namespace
