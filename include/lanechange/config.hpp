@@ -295,6 +295,10 @@ struct StrategyQpSettings {
   /// screened so far (MiqpSettings::objective_cutoff): it ranks after it
   /// either way.
   bool screen_cutoff = true;
+  /// Once a candidate holds, a later one runs its rounds only if its
+  /// screened cost is below the held plan's: its first round already costs
+  /// more, and with screen_keep 2 that runner-up was most of the plan's QPs.
+  bool skip_dearer = true;
   /// Where a plan has no path to start from (open loop, a rollout's first
   /// step), start each candidate's rounds from the warm start with its lane
   /// change timed to the candidate's switch nodes (warm_start_for_modes)

@@ -180,6 +180,10 @@ void StrategyQpPlanner::follow_screened(const Scenario& scene, const expert::Pla
   expert::ExpertResult plan;
   int held = 0;
   for (std::size_t i : order) {
+    if (config_.strategy_qp.skip_dearer && out.chosen >= 0 &&
+        out.candidates[i].screen_objective >= out.result.objective) {
+      continue;
+    }
     // The rounds go on from the screened solution: it is the first round's.
     // A candidate cut off in the screen has none, and starts where its
     // screen did.

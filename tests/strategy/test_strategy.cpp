@@ -324,6 +324,24 @@ TEST(Strategy, TheScreenRunsTheRoundsInTheOrderOfTheFirstQpsCost) {
   const planner::StrategyPlan two = planner::StrategyQpPlanner(config, model).plan(s);
   ASSERT_GE(two.chosen, 0);
   EXPECT_LE(two.result.objective, screened.result.objective * (1.0 + 1e-9));
+  // However many may be kept, a candidate screened dearer than the plan in
+  // hand is not run (skip_dearer, the default); without it, every screened
+  // one is.
+  config.strategy_qp.screen_keep = 5;
+  for (const bool skip : {true, false}) {
+    config.strategy_qp.skip_dearer = skip;
+    const planner::StrategyPlan many = planner::StrategyQpPlanner(config, model).plan(s);
+    ASSERT_GE(many.chosen, 0);
+    EXPECT_LE(many.result.objective, two.result.objective * (1.0 + 1e-9));
+    int skipped = 0;
+    for (const auto& c : many.candidates) {
+      if (!std::isfinite(c.screen_objective) || c.rounds_run) continue;
+      ++skipped;
+      EXPECT_GE(c.screen_objective, many.result.objective);
+    }
+    // Here the second candidate's first QP already costs more than the plan.
+    EXPECT_EQ(skipped, skip ? 1 : 0);
+  }
   config.strategy_qp.screen = false;
   const planner::StrategyQpPlanner all(config, model);
   const planner::StrategyPlan cheapest = all.plan(s);
