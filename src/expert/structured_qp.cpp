@@ -85,19 +85,23 @@ void QpWorkspace::set_initial_controls(const std::vector<Eigen::Vector2d>& contr
   initial_controls_.resize(controls.size() + 1, Eigen::Vector2d::Zero());
 }
 
-// Cholesky factor L (lower) of M with each pivot raised by
-// floor * (1 + |M_ii|); false if a pivot is still not positive. Written out
-// for the fixed stage size: Eigen's LLT runs its blocked path, made for large
-// matrices, and took an eighth of the solve time on 7 x 7 ones.
-bool floored_cholesky(const QpStageMatrix& M, double floor, QpStageMatrix& L) {
-  for (int j = 0; j < kQpStage; ++j) {
+// Cholesky factor L (lower) of M's leading Size x Size block, with each
+// pivot raised by floor * (1 + |M_ii|); false if a pivot is still not
+// positive. Written out for the fixed stage size: Eigen's LLT runs its blocked
+// path, made for large matrices, and took an eighth of the solve time on 7 x 7
+// ones.
+constexpr double kFirstPivotFloor = 1e-12;
+
+template <int Size, class Factor>
+bool floored_cholesky(const QpStageMatrix& M, double floor, Factor& L) {
+  for (int j = 0; j < Size; ++j) {
     double pivot = M(j, j) + floor * (1.0 + std::abs(M(j, j)));
     for (int k = 0; k < j; ++k) pivot -= L(j, k) * L(j, k);
     if (!(pivot > 0.0)) return false;
     const double diagonal = std::sqrt(pivot);
     const double inverse = 1.0 / diagonal;
     L(j, j) = diagonal;
-    for (int i = j + 1; i < kQpStage; ++i) {
+    for (int i = j + 1; i < Size; ++i) {
       double entry = M(i, j);
       for (int k = 0; k < j; ++k) entry -= L(i, k) * L(j, k);
       L(i, j) = entry * inverse;
@@ -363,47 +367,83 @@ struct InteriorPointMethod {
     });
   }
 
-  // Riccati backward pass in square-root form: the stage matrix
+  // Riccati backward pass. Each stage matrix
   //   M = [R S; S' Q] + [B A]' P [B A]   (controls first)
-  // is factored by Cholesky, and the next P is L22 L22', positive
-  // semidefinite by construction. The textbook update Q + A'PA - S'R^-1 S
-  // loses that to cancellation once the barrier weights grow large.
+  // gives the gain from the Cholesky factor L11 of its control block, and
+  // the next P. The Schur form takes P = Q~ - L21 L21' (L21 = S~' L11^-T),
+  // two pivots per stage; the square-root form factors all of M and takes
+  // P = L22 L22', positive semidefinite by construction. The Schur form can
+  // lose that to cancellation once the barrier weights grow large, which
+  // shows as an indefinite control block further back: that iteration is
+  // then factored again in square-root form.
   [[nodiscard]] bool factorize() {
+    if (settings.riccati == RiccatiForm::Schur && riccati_pass(RiccatiForm::Schur)) return true;
+    return riccati_pass(RiccatiForm::SquareRoot);
+  }
+
+  [[nodiscard]] bool riccati_pass(RiccatiForm form) {
     StateMatrix P = ws.hess_[n].topLeftCorner<kQpStates, kQpStates>();
     P = 0.5 * (P + P.transpose());
-    Eigen::Matrix<double, kQpStage, kQpStage> M;
+    QpStageMatrix M;
     for (int k = n - 1; k >= 0; --k) {
-      const QpStage& st = qp.stages[k];
-      const auto& H = ws.hess_[k];
-      const Eigen::Matrix<double, kQpStates, kQpControls> PB = P * st.B;
-      const StateMatrix PA = P * st.A;
-      M.topLeftCorner<kQpControls, kQpControls>() =
-          H.bottomRightCorner<kQpControls, kQpControls>() + st.B.transpose() * PB;
-      M.topRightCorner<kQpControls, kQpStates>() =
-          H.bottomLeftCorner<kQpControls, kQpStates>() + PB.transpose() * st.A;
-      M.bottomLeftCorner<kQpStates, kQpControls>() =
-          M.topRightCorner<kQpControls, kQpStates>().transpose();
-      M.bottomRightCorner<kQpStates, kQpStates>() =
-          H.topLeftCorner<kQpStates, kQpStates>() + st.A.transpose() * PA;
-      // States without cost or rows (x in a relaxation, say) leave M
-      // singular; a floor on each pivot, relative to its own size so that
-      // the tiny entries are not swamped by the huge barrier weights,
-      // keeps Cholesky going without changing the step measurably.
-      QpStageMatrix L;
-      bool factored = false;
-      for (double floor = 1e-12; floor <= 1e-2 && !factored; floor *= 100.0) {
-        factored = floored_cholesky(M, floor, L);
-      }
+      stage_matrix(k, P, M);
+      const bool factored =
+          form == RiccatiForm::Schur ? schur_step(k, M, P) : square_root_step(k, M, P);
       if (!factored) return false;
-      const Eigen::Matrix2d L11 = L.topLeftCorner<kQpControls, kQpControls>();
-      Eigen::Matrix2d L11_inverse;
-      L11_inverse << 1.0 / L11(0, 0), 0.0, -L11(1, 0) / (L11(0, 0) * L11(1, 1)), 1.0 / L11(1, 1);
-      ws.rbar_inverse_[k] = L11_inverse.transpose() * L11_inverse;
-      ws.sbar_[k] = M.topRightCorner<kQpControls, kQpStates>();
-      ws.gain_[k] = -ws.rbar_inverse_[k] * ws.sbar_[k];
-      const StateMatrix L22 = L.bottomRightCorner<kQpStates, kQpStates>();
-      P.noalias() = L22 * L22.transpose();
     }
+    return true;
+  }
+
+  void stage_matrix(int k, const StateMatrix& P, QpStageMatrix& M) const {
+    const QpStage& st = qp.stages[k];
+    const auto& H = ws.hess_[k];
+    const Eigen::Matrix<double, kQpStates, kQpControls> PB = P * st.B;
+    const StateMatrix PA = P * st.A;
+    M.topLeftCorner<kQpControls, kQpControls>() =
+        H.bottomRightCorner<kQpControls, kQpControls>() + st.B.transpose() * PB;
+    M.topRightCorner<kQpControls, kQpStates>() =
+        H.bottomLeftCorner<kQpControls, kQpStates>() + PB.transpose() * st.A;
+    M.bottomLeftCorner<kQpStates, kQpControls>() =
+        M.topRightCorner<kQpControls, kQpStates>().transpose();
+    M.bottomRightCorner<kQpStates, kQpStates>() =
+        H.topLeftCorner<kQpStates, kQpStates>() + st.A.transpose() * PA;
+  }
+
+  // The stage's gain from L11; returns L11^-1.
+  Eigen::Matrix2d store_gain(int k, const QpStageMatrix& M, const Eigen::Matrix2d& L11) {
+    Eigen::Matrix2d L11_inverse;
+    L11_inverse << 1.0 / L11(0, 0), 0.0, -L11(1, 0) / (L11(0, 0) * L11(1, 1)), 1.0 / L11(1, 1);
+    ws.rbar_inverse_[k] = L11_inverse.transpose() * L11_inverse;
+    ws.sbar_[k] = M.topRightCorner<kQpControls, kQpStates>();
+    ws.gain_[k] = -ws.rbar_inverse_[k] * ws.sbar_[k];
+    return L11_inverse;
+  }
+
+  bool schur_step(int k, const QpStageMatrix& M, StateMatrix& P) {
+    Eigen::Matrix2d L11;
+    if (!floored_cholesky<kQpControls>(M, kFirstPivotFloor, L11)) return false;
+    const Eigen::Matrix2d L11_inverse = store_gain(k, M, L11);
+    const Eigen::Matrix<double, kQpStates, kQpControls> L21 =
+        ws.sbar_[k].transpose() * L11_inverse.transpose();
+    P.noalias() = M.bottomRightCorner<kQpStates, kQpStates>() - L21 * L21.transpose();
+    P = 0.5 * (P + P.transpose()).eval();
+    return true;
+  }
+
+  bool square_root_step(int k, const QpStageMatrix& M, StateMatrix& P) {
+    // States without cost or rows (x in a relaxation, say) leave M
+    // singular; a floor on each pivot, relative to its own size so that
+    // the tiny entries are not swamped by the huge barrier weights,
+    // keeps Cholesky going without changing the step measurably.
+    QpStageMatrix L;
+    bool factored = false;
+    for (double floor = kFirstPivotFloor; floor <= 1e-2 && !factored; floor *= 100.0) {
+      factored = floored_cholesky<kQpStage>(M, floor, L);
+    }
+    if (!factored) return false;
+    store_gain(k, M, L.topLeftCorner<kQpControls, kQpControls>());
+    const StateMatrix L22 = L.bottomRightCorner<kQpStates, kQpStates>();
+    P.noalias() = L22 * L22.transpose();
     return true;
   }
 

@@ -168,3 +168,30 @@ TEST(StructuredQp, AWarmStartReachesTheColdOptimum) {
   }
   EXPECT_GE(fewer, 10);  // most of them
 }
+
+// The two forms of the Riccati recursion solve the same Newton systems, so
+// they reach the same optimum; the Schur form falls back on the square-root
+// form where it loses definiteness, so it never fails where that one holds.
+TEST(StructuredQp, BothRiccatiFormsReachTheSameOptimum) {
+  for (unsigned seed = 1; seed <= 20; ++seed) {
+    for (const double accel_curvature : {0.5, 2.0}) {
+      const lc::StructuredQp qp =
+          random_qp(seed, {accel_curvature, accel_curvature == 2.0 ? 2.0 : 1e-6}, true);
+      lc::QpResult result[2];
+      int i = 0;
+      for (const lc::RiccatiForm form : {lc::RiccatiForm::Schur, lc::RiccatiForm::SquareRoot}) {
+        lc::QpWorkspace ws;
+        ws.setup(qp);
+        lc::QpSettings settings;
+        settings.riccati = form;
+        result[i++] = lc::solve_structured_qp(qp, ws, settings);
+      }
+      ASSERT_EQ(result[1].status, lc::QpStatus::Optimal) << "seed " << seed;
+      EXPECT_EQ(result[0].status, result[1].status) << "seed " << seed;
+      EXPECT_NEAR(result[0].objective, result[1].objective,
+                  1e-7 * (1.0 + std::abs(result[1].objective)))
+          << "seed " << seed;
+      EXPECT_NEAR(result[0].iterations, result[1].iterations, 2) << "seed " << seed;
+    }
+  }
+}

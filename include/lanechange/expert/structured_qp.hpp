@@ -63,8 +63,21 @@ struct StructuredQp {
   [[nodiscard]] int steps() const { return static_cast<int>(stages.size()) - 1; }
 };
 
+/// How the Riccati recursion forms the next cost-to-go matrix P from a
+/// stage's factored control block.
+enum class RiccatiForm {
+  /// P as the Schur complement of the control block: two pivots per stage.
+  /// An iteration where rounding leaves a later control block indefinite
+  /// (barrier weights of 1e12 and more) is factored again in SquareRoot form.
+  Schur,
+  /// P = L22 L22' from a Cholesky factor of the whole stage matrix: positive
+  /// semidefinite by construction, at seven pivots per stage.
+  SquareRoot,
+};
+
 struct QpSettings {
   int max_iterations = 60;
+  RiccatiForm riccati = RiccatiForm::Schur;
   double tolerance = 1e-10;        ///< on the mean complementarity product
   double primal_tolerance = 1e-8;  ///< on the rows and the terminal equality (m)
   /// On the stationarity of the controls. Looser than the rest: with barrier
