@@ -19,6 +19,7 @@
 #include <string>
 #include <vector>
 
+#include "expert/fast_solver_internal.hpp"
 #include "lanechange/expert/crosscheck.hpp"
 #include "lanechange/expert/planner.hpp"
 #include "lanechange/sampler.hpp"
@@ -84,7 +85,7 @@ const std::vector<ex::LaneChangeQp>& first_round_problems() {
 }
 
 struct Samples {
-  std::vector<double> fast_solve_ms, reference_solve_ms, plan_ms;
+  std::vector<double> fast_solve_ms, square_root_solve_ms, reference_solve_ms, plan_ms;
   std::vector<long> plan_allocations, plan_bytes;
 };
 Samples g_samples;
@@ -99,13 +100,13 @@ double thread_cpu_ms() {
 
 // One solve per scenario, cycling through them.
 void solve_all(benchmark::State& state, const ex::LaneChangeSolver& solver, int count,
-               std::vector<double>& samples) {
+               std::vector<double>& samples, ex::LaneChangeWorkspace* workspace = nullptr) {
   const auto& problems = first_round_problems();
   std::size_t i = 0;
   for (auto _ : state) {
     const auto& qp = problems[i % static_cast<std::size_t>(count)];
     const double t0 = thread_cpu_ms();
-    auto solution = solver.solve(qp, {});
+    auto solution = solver.solve(qp, {}, {workspace, nullptr, nullptr});
     benchmark::DoNotOptimize(solution);
     samples.push_back(thread_cpu_ms() - t0);
     ++i;
@@ -116,6 +117,15 @@ void solve_all(benchmark::State& state, const ex::LaneChangeSolver& solver, int 
 void BM_FastSolve(benchmark::State& state) {
   solve_all(state, ex::FastLaneChangeSolver{}, env_int("LANECHANGE_BENCH_REFERENCE_SCENARIOS", 100),
             g_samples.fast_solve_ms);
+}
+
+// The same solves with every node QP's Riccati pass in square-root form
+// (the default before stop 25), for the ratio in the same run.
+void BM_FastSolveSquareRoot(benchmark::State& state) {
+  ex::detail::FastWorkspace workspace;
+  workspace.riccati = ex::RiccatiForm::SquareRoot;
+  solve_all(state, ex::FastLaneChangeSolver{}, env_int("LANECHANGE_BENCH_REFERENCE_SCENARIOS", 100),
+            g_samples.square_root_solve_ms, &workspace);
 }
 
 void BM_ReferenceSolve(benchmark::State& state) {
@@ -190,6 +200,13 @@ void print_summary() {
       fast, g_samples.fast_solve_ms.size(), reference, g_samples.reference_solve_ms.size());
   if (fast > 0 && reference > 0)
     std::printf("ratio reference / fast (medians, this run): %.0f\n", reference / fast);
+  const double square_root = median(g_samples.square_root_solve_ms);
+  if (fast > 0 && square_root > 0) {
+    std::printf(
+        "fast with the square-root Riccati pass: %.3f ms; ratio square-root / schur (medians, "
+        "this run): %.2f\n",
+        square_root, square_root / fast);
+  }
   std::printf("median full plan (all rounds, fast, %s rule): %.3f ms over %zu plans\n",
               lc::Config{}.expert.lane_rule == lc::LaneRule::Footprint ? "footprint" : "either_or",
               median(g_samples.plan_ms), g_samples.plan_ms.size());
@@ -207,6 +224,9 @@ void print_summary() {
 }  // namespace
 
 BENCHMARK(BM_FastSolve)
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(3 * env_int("LANECHANGE_BENCH_REFERENCE_SCENARIOS", 100));
+BENCHMARK(BM_FastSolveSquareRoot)
     ->Unit(benchmark::kMillisecond)
     ->Iterations(3 * env_int("LANECHANGE_BENCH_REFERENCE_SCENARIOS", 100));
 BENCHMARK(BM_ReferenceSolve)

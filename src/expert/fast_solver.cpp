@@ -249,6 +249,7 @@ NodeOutcome solve_node_with(const LaneChangeQp& qp, const std::vector<int>& mode
   ws.qp_workspace.set_initial_controls(ws.start_controls);
   QpSettings settings;
   settings.warm_start = ws.warm_start_qp && precision == NodePrecision::Exact;
+  settings.riccati = ws.riccati;
   // The QP's objective leaves out LaneChangeQp::objective's constant.
   const double qp_cutoff = cutoff - qp.objective_constant();
   // A hair above the cutoff: a node this close is decided by its converged objective.

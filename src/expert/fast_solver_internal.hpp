@@ -24,6 +24,7 @@ struct FastWorkspace final : LaneChangeWorkspace {
   long iterations = 0;         // of the interior-point method, for the solution's statistics
   unsigned needed_bounds = 0;  // state components whose bounds this round's QPs carry
   bool warm_start_qp = false;  // start a node QP from the last one's multipliers (fixed modes)
+  RiccatiForm riccati = RiccatiForm::Schur;  // of the node QPs (bench_expert compares the forms)
   // Per node, bit m set when lane mode m can hold there at all: the states
   // the round's dynamics, bounds and controls can reach leave the others out.
   std::vector<unsigned> possible_modes;
