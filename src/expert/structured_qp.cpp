@@ -54,7 +54,7 @@ void QpWorkspace::setup(const StructuredQp& qp) {
   }
   for (auto* v : {&dt_, &dlambda_, &dsigma_, &dlambda_soft_, &weight_, &offset_, &soft_q_, &dt_aff_,
                   &dlambda_aff_, &dsigma_aff_, &dlambda_soft_aff_, &a_, &inverse_t_,
-                  &inverse_sigma_, &inverse_a_plus_b_}) {
+                  &inverse_sigma_, &inverse_a_plus_b_, &residual_}) {
     v->assign(rows, 0.0);
   }
 }
@@ -248,7 +248,8 @@ struct InteriorPointMethod {
       add_row_times(row, i, ws.lambda_[i], ws.grad_base_[k]);
       sum += ws.lambda_[i] * ws.t_[i];
       ++count;
-      m.primal = std::max(m.primal, std::abs(primal_residual(row, k, i)));
+      ws.residual_[i] = primal_residual(row, k, i);
+      m.primal = std::max(m.primal, std::abs(ws.residual_[i]));
       if (row.soft) {
         sum += ws.lambda_soft_[i] * ws.sigma_[i];
         ++count;
@@ -353,7 +354,7 @@ struct InteriorPointMethod {
   void newton_gradient(C4&& c4_of, C5&& c5_of) {
     for (int k = 0; k <= n; ++k) ws.grad_[k] = ws.grad_base_[k];
     for_each_row([&](int k, const QpRow& row, int i) {
-      const double r1 = primal_residual(row, k, i);
+      const double r1 = ws.residual_[i];
       const double a = ws.a_[i];
       double e = c4_of(i) * ws.inverse_t_[i] + a * r1;
       if (row.soft) {
@@ -497,7 +498,7 @@ struct InteriorPointMethod {
     };
     for_each_row([&](int k, const QpRow& row, int i) {
       const double gd = row_dot(row, i, ws.dw_[k]);
-      const double r1 = primal_residual(row, k, i);
+      const double r1 = ws.residual_[i];
       ws.dlambda_[i] = ws.weight_[i] * gd + ws.offset_[i];
       if (row.soft) {
         ws.dsigma_[i] = (ws.soft_q_[i] + ws.a_[i] * gd) * ws.inverse_a_plus_b_[i];

@@ -156,6 +156,7 @@ class QpWorkspace {
   std::vector<double> weight_, offset_, soft_q_;
   std::vector<double> dt_aff_, dlambda_aff_, dsigma_aff_, dlambda_soft_aff_;
   std::vector<double> a_, inverse_t_, inverse_sigma_, inverse_a_plus_b_;  ///< per iteration
+  std::vector<double> residual_;  ///< per row, g'w + t - d (- sigma), at the iteration's point
 };
 
 /// Solves from the workspace's initial controls (zero unless set).
