@@ -493,8 +493,10 @@ struct InteriorPointMethod {
       for (int k = 0; k <= n; ++k) ws.dw_[k] += ws.terminal_step_ * ws.dw_unit_[k];
     }
     double alpha = 1.0;
+    // Divide only where the step would cross the bound: a division per
+    // row and variable was a tenth of the iteration.
     auto limit = [&alpha](double value, double change) {
-      if (change < 0.0) alpha = std::min(alpha, -value / change);
+      if (value + alpha * change < 0.0) alpha = std::min(alpha, -value / change);
     };
     for_each_row([&](int k, const QpRow& row, int i) {
       const double gd = row_dot(row, i, ws.dw_[k]);
