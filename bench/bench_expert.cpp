@@ -16,6 +16,7 @@
 #include <fstream>
 #include <new>
 #include <numeric>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -98,15 +99,19 @@ double thread_cpu_ms() {
   return static_cast<double>(t.tv_sec) * 1e3 + static_cast<double>(t.tv_nsec) * 1e-6;
 }
 
-// One solve per scenario, cycling through them.
+// One solve per scenario, cycling through them. With `riccati`, the fast
+// solver's node QPs use that form; each solve still sets up a workspace of
+// its own, as one without a workspace does.
 void solve_all(benchmark::State& state, const ex::LaneChangeSolver& solver, int count,
-               std::vector<double>& samples, ex::LaneChangeWorkspace* workspace = nullptr) {
+               std::vector<double>& samples, std::optional<ex::RiccatiForm> riccati = {}) {
   const auto& problems = first_round_problems();
   std::size_t i = 0;
   for (auto _ : state) {
     const auto& qp = problems[i % static_cast<std::size_t>(count)];
     const double t0 = thread_cpu_ms();
-    auto solution = solver.solve(qp, {}, {workspace, nullptr, nullptr});
+    std::optional<ex::detail::FastWorkspace> workspace;
+    if (riccati) workspace.emplace().riccati = *riccati;
+    auto solution = solver.solve(qp, {}, {workspace ? &*workspace : nullptr, nullptr, nullptr});
     benchmark::DoNotOptimize(solution);
     samples.push_back(thread_cpu_ms() - t0);
     ++i;
@@ -122,10 +127,8 @@ void BM_FastSolve(benchmark::State& state) {
 // The same solves with every node QP's Riccati pass in square-root form
 // (the default before stop 25), for the ratio in the same run.
 void BM_FastSolveSquareRoot(benchmark::State& state) {
-  ex::detail::FastWorkspace workspace;
-  workspace.riccati = ex::RiccatiForm::SquareRoot;
   solve_all(state, ex::FastLaneChangeSolver{}, env_int("LANECHANGE_BENCH_REFERENCE_SCENARIOS", 100),
-            g_samples.square_root_solve_ms, &workspace);
+            g_samples.square_root_solve_ms, ex::RiccatiForm::SquareRoot);
 }
 
 void BM_ReferenceSolve(benchmark::State& state) {
