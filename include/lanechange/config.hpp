@@ -299,6 +299,12 @@ struct StrategyQpSettings {
   /// screened cost is below the held plan's: its first round already costs
   /// more, and with screen_keep 2 that runner-up was most of the plan's QPs.
   bool skip_dearer = true;
+  /// Once a plan holds, also try the strategies whose two switch nodes (out
+  /// of the ego lane, into the target lane) each lie within this many nodes
+  /// of the followed one's, each screened with the plan's cost as cutoff and
+  /// its rounds run where the screen is cheaper: the vote often lands a node
+  /// or two off the optimum's strategy. 0: off.
+  int neighbour_nodes = 0;
   /// Where a plan has no path to start from (open loop, a rollout's first
   /// step), start each candidate's rounds from the warm start with its lane
   /// change timed to the candidate's switch nodes (warm_start_for_modes)

@@ -201,6 +201,7 @@ void visit_fields(V& v, S& s) requires std::same_as<std::remove_const_t<S>, Stra
   v("rough_screen", s.rough_screen);
   v("screen_cutoff", s.screen_cutoff);
   v("skip_dearer", s.skip_dearer);
+  v("neighbour_nodes", s.neighbour_nodes);
   v("timed_warm_start", s.timed_warm_start);
   v("first_feasible", s.first_feasible);
 }

@@ -35,6 +35,35 @@ std::vector<int> modes_of_strategy(const learn::Strategy& strategy, int steps, L
   return modes;
 }
 
+std::vector<learn::Strategy> neighbour_strategies(const learn::Strategy& strategy, int reach) {
+  constexpr auto kNone = learn::Strategy::npos;
+  const auto leave = strategy.find_first_not_of('0');
+  const auto enter = strategy.find('2');
+  const bool one_change = leave != kNone && enter != kNone && leave < enter &&
+                          strategy.find_first_not_of('1', leave) == enter &&
+                          strategy.find_first_not_of('2', enter) == kNone;
+  if (!one_change) return {};
+  const auto length = static_cast<int>(strategy.size());
+  std::vector<std::pair<int, learn::Strategy>> found;
+  for (int shift_leave = -reach; shift_leave <= reach; ++shift_leave) {
+    for (int shift_enter = -reach; shift_enter <= reach; ++shift_enter) {
+      const int a = static_cast<int>(leave) + shift_leave;
+      const int b = static_cast<int>(enter) + shift_enter;
+      if ((shift_leave == 0 && shift_enter == 0) || a < 0 || a >= b || b >= length) continue;
+      const auto count = [](int n) { return static_cast<std::size_t>(n); };
+      found.emplace_back(std::abs(shift_leave) + std::abs(shift_enter),
+                         learn::Strategy(count(a), '0') + learn::Strategy(count(b - a), '1') +
+                             learn::Strategy(count(length - b), '2'));
+    }
+  }
+  std::stable_sort(found.begin(), found.end(),
+                   [](const auto& x, const auto& y) { return x.first < y.first; });
+  std::vector<learn::Strategy> out;
+  out.reserve(found.size());
+  for (auto& f : found) out.push_back(std::move(f.second));
+  return out;
+}
+
 StrategyQpPlanner::StrategyQpPlanner(Config config,
                                      std::shared_ptr<const learn::StrategyModel> model)
     : config_(closed_loop_expert(std::move(config))),
@@ -146,17 +175,11 @@ void StrategyQpPlanner::follow_screened(const Scenario& scene, const expert::Pla
   std::vector<std::size_t> order;
   double best_screen = expert::kInfinity;
   for (const Candidate& c : list) {
-    // Candidates with a start of their own each have their linearization;
-    // the others share the plan's.
-    if (first.point.states.empty() || !c.start.states.empty()) {
-      first = fixed_.first_round(scene, {c.first_point(hints), nullptr});
-    }
     // A candidate proven dearer than the best so far ranks after it: the
     // bound that proves it is enough, and the rest of its QP is saved.
-    expert::MiqpSettings screen_settings;
-    if (config_.strategy_qp.screen_cutoff) screen_settings.objective_cutoff = best_screen;
-    screens.push_back(screen_solver_.solve(first.qp, screen_settings,
-                                           {workspace.get(), &c.modes, &first.point.controls}));
+    double cutoff = expert::kInfinity;
+    if (config_.strategy_qp.screen_cutoff) cutoff = best_screen;
+    screens.push_back(screen_one(scene, hints, c, cutoff, first, workspace.get()));
     out.qp_iterations += screens.back().qp_iterations;
     CandidateOutcome o;
     o.strategy = c.strategy;
@@ -201,6 +224,64 @@ void StrategyQpPlanner::follow_screened(const Scenario& scene, const expert::Pla
   }
 }
 
+expert::LaneChangeSolution StrategyQpPlanner::screen_one(
+    const Scenario& scene, const expert::PlanHints& hints, const Candidate& c, double cutoff,
+    expert::LinearizedRound& first, expert::LaneChangeWorkspace* workspace) const {
+  // Candidates with a start of their own each have their linearization;
+  // the others share the plan's.
+  if (first.point.states.empty() || !c.start.states.empty()) {
+    first = fixed_.first_round(scene, {c.first_point(hints), nullptr});
+  }
+  expert::MiqpSettings settings;
+  settings.objective_cutoff = cutoff;
+  return screen_solver_.solve(first.qp, settings, {workspace, &c.modes, &first.point.controls});
+}
+
+void StrategyQpPlanner::search_neighbours(const Scenario& scene, const expert::PlanLimits& limits,
+                                          StrategyPlan& out) const {
+  const int reach = config_.strategy_qp.neighbour_nodes;
+  if (reach <= 0 || out.chosen < 0) return;
+  const learn::Strategy around = out.candidates[static_cast<std::size_t>(out.chosen)].strategy;
+  const LaneRule rule = effective_config(config_, scene).expert.lane_rule;
+  std::vector<std::vector<int>> tried;
+  for (const CandidateOutcome& o : out.candidates) {
+    tried.push_back(modes_of_strategy(o.strategy, scene.steps, rule));
+  }
+  std::vector<Candidate> list;
+  for (learn::Strategy& s : neighbour_strategies(around, reach)) {
+    std::vector<int> modes = modes_of_strategy(s, scene.steps, rule);
+    if (std::find(tried.begin(), tried.end(), modes) != tried.end()) continue;
+    tried.push_back(modes);
+    list.push_back({std::move(s), std::move(modes), {}});
+  }
+  // Every neighbour is screened at the plan's own linearization: a fixed
+  // point of its rounds, and close to the neighbours' own.
+  const expert::Iterate at_plan = out.result.path;
+  const expert::PlanHints from_plan{&at_plan, nullptr};
+  const auto workspace = screen_solver_.make_workspace();
+  expert::LinearizedRound first;
+  expert::ExpertResult plan;
+  std::vector<int> unused_hint;
+  for (const Candidate& c : list) {
+    const expert::LaneChangeSolution screen =
+        screen_one(scene, from_plan, c, out.result.objective, first, workspace.get());
+    out.qp_iterations += screen.qp_iterations;
+    CandidateOutcome o;
+    const bool has_point =
+        screen.status == expert::MiqpStatus::Optimal || screen.status == expert::MiqpStatus::Cutoff;
+    if (!has_point) o.status = expert::PlanStatus::Infeasible;
+    if (screen.status == expert::MiqpStatus::Optimal && screen.objective < out.result.objective) {
+      o = solve_candidate(scene, c.modes, limits, {&screen.path, nullptr}, plan);
+      if (take_candidate(o, c.modes, plan, out, unused_hint)) {
+        out.chosen = static_cast<int>(out.candidates.size());
+      }
+    }
+    if (has_point) o.screen_objective = screen.objective;
+    o.strategy = c.strategy;
+    out.candidates.push_back(std::move(o));
+  }
+}
+
 StrategyPlan StrategyQpPlanner::plan(const Scenario& scene, const expert::PlanLimits& limits,
                                      const expert::PlanHints& hints) const {
   const auto start = Clock::now();
@@ -210,6 +291,7 @@ StrategyPlan StrategyQpPlanner::plan(const Scenario& scene, const expert::PlanLi
   std::vector<int> rescued_hint;
   if (config_.strategy_qp.screen) {
     follow_screened(scene, limits, hints, list, out, rescued_hint);
+    search_neighbours(scene, limits, out);
   } else {
     follow_in_order(scene, limits, hints, list, config_.strategy_qp.first_feasible, out,
                     rescued_hint);

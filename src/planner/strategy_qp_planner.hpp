@@ -52,6 +52,13 @@ struct StrategyPlan {
 [[nodiscard]] std::vector<int> modes_of_strategy(const learn::Strategy& strategy, int steps,
                                                  LaneRule rule);
 
+/// The lane changes whose switch nodes (first out of the ego lane, first in the
+/// target lane) each lie within `reach` nodes of `strategy`'s, nearest first
+/// (by the sum of the shifts); none unless `strategy` is one lane change
+/// (ego lane, across, target lane, each once and in that order).
+[[nodiscard]] std::vector<learn::Strategy> neighbour_strategies(const learn::Strategy& strategy,
+                                                                int reach);
+
 class StrategyQpPlanner final : public ClosedLoopPlanner {
  public:
   StrategyQpPlanner(Config config, std::shared_ptr<const learn::StrategyModel> model);
@@ -102,6 +109,17 @@ class StrategyQpPlanner final : public ClosedLoopPlanner {
   void follow_screened(const Scenario& scene, const expert::PlanLimits& limits,
                        const expert::PlanHints& hints, const std::vector<Candidate>& list,
                        StrategyPlan& out, std::vector<int>& rescued_hint) const;
+  /// The first round's QP of `c` solved with its modes fixed and
+  /// `cutoff`, roughly when screen_solver_ is; `first` holds the shared
+  /// linearization and is rebuilt when `c` has a start of its own.
+  [[nodiscard]] expert::LaneChangeSolution screen_one(const Scenario& scene,
+                                                      const expert::PlanHints& hints,
+                                                      const Candidate& c, double cutoff,
+                                                      expert::LinearizedRound& first,
+                                                      expert::LaneChangeWorkspace* workspace) const;
+  /// neighbour_nodes: tries the followed strategy's neighbours.
+  void search_neighbours(const Scenario& scene, const expert::PlanLimits& limits,
+                         StrategyPlan& out) const;
   /// Records one candidate's rounds; true when the plan follows it.
   bool take_candidate(CandidateOutcome& outcome, const std::vector<int>& modes,
                       expert::ExpertResult& plan, StrategyPlan& out,

@@ -92,13 +92,17 @@ void add_scene(const StrategyQpPlanner& planner, const Scenario& scene, int inde
   const std::string own = exact_strategy(exact);
   const CandidateOutcome own_outcome = planner.assess_strategy(scene, own);
   t.own_strategy_holds += own_outcome.feasible() ? 1 : 0;
-  json record = {{"index", index},
-                 {"behavior", to_string(scene.behavior)},
-                 {"exact_objective", exact.objective},
-                 {"exact_strategy", own},
-                 {"exact_strategy_outcome", outcome_of(own_outcome)},
-                 {"followed", learned.chosen},
-                 {"candidates", json::array()}};
+  json record = {
+      {"index", index},
+      {"behavior", to_string(scene.behavior)},
+      {"exact_objective", exact.objective},
+      {"exact_strategy", own},
+      {"exact_strategy_outcome", outcome_of(own_outcome)},
+      {"followed", learned.chosen},
+      {"followed_strategy",
+       learned.chosen >= 0 ? learned.candidates[static_cast<std::size_t>(learned.chosen)].strategy
+                           : ""},
+      {"candidates", json::array()}};
   for (const CandidateOutcome& o : c) {
     const std::string outcome = outcome_of(o);
     ++t.candidate_outcomes[outcome];

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 #include <memory>
+#include <string>
 
 #include "lanechange/error.hpp"
 #include "lanechange/expert/planner.hpp"
@@ -47,6 +48,19 @@ std::shared_ptr<const learn::StrategyModel> model_of(const std::vector<Scenario>
   rows.labels = labels;
   rows.traffic_speed_cap = default_cap();
   return std::make_shared<const learn::StrategyModel>(learn::StrategyModel::fit(rows, {3, 0}));
+}
+
+// The exact expert's plan of `s` (asserted converged by the callers) and
+// its strategy.
+struct ExactPlan {
+  ExpertResult result;
+  learn::Strategy strategy;
+};
+ExactPlan exact_plan_of(const Scenario& s, const Config& config) {
+  const planner::StrategyQpPlanner probe(config, model_of({s}, {"0"}));
+  ExactPlan out{probe.exact().plan(s), {}};
+  out.strategy = learn::strategy_of(lane_modes_of(out.result));
+  return out;
 }
 
 TEST(Strategy, LaneModeIndicesFollowTheFormulation) {
@@ -263,15 +277,70 @@ TEST(Strategy, AnInfeasiblePredictionFallsBackToTheExactAnswer) {
 TEST(Strategy, AGoodPredictionIsFollowedWithTheExactCost) {
   const Config config = testing::untimed_config();
   const Scenario s = testing::open_road_scenario();
-  const planner::StrategyQpPlanner probe(config, model_of({s}, {"0"}));
-  const ExpertResult exact = probe.exact().plan(s);
+  const auto [exact, truth] = exact_plan_of(s, config);
   ASSERT_EQ(exact.status, PlanStatus::Converged);
-  const learn::Strategy truth = learn::strategy_of(lane_modes_of(exact));
   const planner::StrategyQpPlanner p(config, model_of({s, s}, {"2", truth}));
   const planner::StrategyPlan learned = p.plan(s);
   ASSERT_GE(learned.chosen, 0);
   EXPECT_EQ(learned.candidates[static_cast<std::size_t>(learned.chosen)].strategy, truth);
   EXPECT_NEAR(learned.result.objective, exact.objective, 0.01 * exact.objective);
+}
+
+TEST(Strategy, NeighbourStrategiesShiftEachSwitchNode) {
+  const auto near = planner::neighbour_strategies("0011122", 1);
+  // (2, 5) shifted by at most one each, the unshifted one left out, and the
+  // single shifts before the double ones.
+  ASSERT_EQ(near.size(), 8U);
+  for (std::size_t i = 0; i < near.size(); ++i) {
+    const auto& n = near[i];
+    ASSERT_EQ(n.size(), 7U);
+    const auto leave = static_cast<int>(n.find('1'));
+    const auto enter = static_cast<int>(n.find('2'));
+    EXPECT_LE(std::abs(leave - 2), 1) << n;
+    EXPECT_LE(std::abs(enter - 5), 1) << n;
+    EXPECT_EQ(std::abs(leave - 2) + std::abs(enter - 5), i < 4 ? 1 : 2) << n;
+    EXPECT_EQ(
+        n, std::string(leave, '0') + std::string(enter - leave, '1') + std::string(7 - enter, '2'));
+  }
+  // The target lane must still be reached on the horizon, after the line.
+  for (const auto& n : planner::neighbour_strategies("0000012", 2)) {
+    EXPECT_NE(n.find('2'), std::string::npos) << n;
+    EXPECT_LT(n.find('1'), n.find('2')) << n;
+  }
+  // Only a single lane change has switch nodes to shift.
+  EXPECT_TRUE(planner::neighbour_strategies("0000000", 1).empty());
+  EXPECT_TRUE(planner::neighbour_strategies("0011100", 1).empty());
+  EXPECT_TRUE(planner::neighbour_strategies("0012122", 1).empty());
+}
+
+TEST(Strategy, TheNeighbourSearchFindsTheOptimumOneNodeAway) {
+  Config config = testing::untimed_config();
+  const Scenario s = testing::open_road_scenario();
+  const auto [exact, truth] = exact_plan_of(s, config);
+  ASSERT_EQ(exact.status, PlanStatus::Converged);
+  // The vote's one strategy changes lanes a node after the optimum's.
+  const learn::Strategy late = "0" + truth.substr(0, truth.size() - 1);
+  const auto model = model_of({s}, {late});
+  ASSERT_EQ(config.strategy_qp.neighbour_nodes, 0);  // off by default
+  const planner::StrategyPlan alone = planner::StrategyQpPlanner(config, model).plan(s);
+  ASSERT_GE(alone.chosen, 0);
+  EXPECT_EQ(alone.candidates.size(), 1U);
+  config.strategy_qp.neighbour_nodes = 1;
+  const planner::StrategyPlan searched = planner::StrategyQpPlanner(config, model).plan(s);
+  ASSERT_GE(searched.chosen, 0);
+  EXPECT_GT(searched.candidates.size(), 1U);
+  // A neighbour's screen at the plan's linearization ranks it to within a
+  // few tenths of a percent, so the search lands near the optimum, not on it.
+  EXPECT_LT(searched.result.objective, alone.result.objective);
+  EXPECT_NEAR(searched.result.objective, exact.objective, 0.01 * exact.objective);
+  // Neighbours are screened against the plan in hand: one whose rounds ran
+  // was screened cheaper than the plan it was tried against.
+  for (std::size_t i = 1; i < searched.candidates.size(); ++i) {
+    const auto& c = searched.candidates[i];
+    if (c.rounds_run) {
+      EXPECT_LT(c.screen_objective, alone.result.objective);
+    }
+  }
 }
 
 TEST(Strategy, TheFirstRoundIsThePlansFirstRound) {
@@ -290,10 +359,8 @@ TEST(Strategy, TheFirstRoundIsThePlansFirstRound) {
 TEST(Strategy, TheScreenRunsTheRoundsInTheOrderOfTheFirstQpsCost) {
   Config config = testing::untimed_config();
   const Scenario s = testing::open_road_scenario();
-  const planner::StrategyQpPlanner probe(config, model_of({s}, {"0"}));
-  const ExpertResult exact = probe.exact().plan(s);
+  const auto [exact, truth] = exact_plan_of(s, config);
   ASSERT_EQ(exact.status, PlanStatus::Converged);
-  const learn::Strategy truth = learn::strategy_of(lane_modes_of(exact));
   const std::vector<learn::Strategy> labels = {"2", "00000" + truth, truth, "0000000000" + truth};
   const auto model = model_of({s, s, s, s}, labels);
   ASSERT_TRUE(config.strategy_qp.screen);  // the default
