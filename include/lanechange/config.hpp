@@ -278,6 +278,13 @@ struct LatticeSettings {
 /// The learned-strategy planner (docs/strategy.md, "strategy-qp").
 struct StrategyQpSettings {
   int candidates = 5;  ///< predicted strategies per plan (MLOPT's top k)
+  /// Where a plan has no last plan's modes to go on (open loop, a rollout's
+  /// first step), the vote ranks this many strategies, and the first
+  /// `candidates` of them that lane_modes_can_hold does not refuse at their
+  /// first linearization are the plan's candidates: a vote the reachable
+  /// states rule out then costs no QP and takes no place. At most
+  /// `candidates`: no check (docs/strategy.md, stop 26).
+  int vote_pool = 15;
   /// Rank the candidates by one QP each at the first round's linearization,
   /// run the rounds for them in that order and follow the first that
   /// converges collision-free: about one candidate's rounds per plan.

@@ -35,6 +35,11 @@ std::string unfit_modes(const LaneChangeQp& qp, const std::vector<int>* modes) {
 
 }  // namespace
 
+bool lane_modes_can_hold(const LaneChangeQp& qp, const std::vector<int>& modes) {
+  return unfit_modes(qp, &modes).empty() && detail::initial_state_allowed(qp) &&
+         detail::modes_can_hold(qp, modes);
+}
+
 std::unique_ptr<LaneChangeWorkspace> FixedModeLaneChangeSolver::make_workspace() const {
   return std::make_unique<detail::FastWorkspace>();
 }

@@ -110,6 +110,21 @@ void StrategyQpPlanner::time_warm_starts(const Scenario& scene, const expert::Pl
   }
 }
 
+bool StrategyQpPlanner::can_hold(const Scenario& scene, const expert::PlanHints& hints,
+                                 Candidate& c, Linearization& shared) const {
+  if (c.start.states.empty()) {
+    if (!shared) {
+      shared = std::make_shared<const expert::LinearizedRound>(
+          fixed_.first_round(scene, {hints.path, nullptr}));
+    }
+    c.first = shared;
+  } else {
+    c.first = std::make_shared<const expert::LinearizedRound>(
+        fixed_.first_round(scene, {&c.start, nullptr}));
+  }
+  return expert::lane_modes_can_hold(c.first->qp, c.modes);
+}
+
 std::vector<StrategyQpPlanner::Candidate> StrategyQpPlanner::candidates_of(
     const Scenario& scene, const expert::PlanHints& hints) const {
   const LaneRule rule = effective_config(config_, scene).expert.lane_rule;
@@ -118,16 +133,31 @@ std::vector<StrategyQpPlanner::Candidate> StrategyQpPlanner::candidates_of(
   // step ago, and keep the manoeuvre steady.
   const auto nodes = static_cast<std::size_t>(scene.steps) + 1;
   if (hints.modes != nullptr && hints.modes->size() == nodes) {
-    list.push_back({{}, *hints.modes, {}});
+    list.push_back({{}, *hints.modes, {}, {}});
+    time_warm_starts(scene, hints, list);
   }
-  for (learn::Strategy& s : model_->predict(scene, config_.strategy_qp.candidates)) {
+  const int wanted = config_.strategy_qp.candidates;
+  // With the last plan's modes to go on, the votes are alternatives to them
+  // and the plain top k serve; without (open loop, a rollout's first step),
+  // every slot a refused vote takes is a step closer to the exact search.
+  const int pool = list.empty() ? std::max(wanted, config_.strategy_qp.vote_pool) : wanted;
+  std::vector<Candidate> votes;
+  for (learn::Strategy& s : model_->predict(scene, pool)) {
     std::vector<int> modes = modes_of_strategy(s, scene.steps, rule);
+    votes.push_back({std::move(s), std::move(modes), {}, {}});
+  }
+  time_warm_starts(scene, hints, votes);
+  Linearization shared;
+  int taken = 0;
+  for (Candidate& c : votes) {
+    if (taken >= wanted) break;
     // Two strategies may agree on this horizon: one solve is enough.
     const bool seen = std::any_of(list.begin(), list.end(),
-                                  [&modes](const Candidate& c) { return c.modes == modes; });
-    if (!seen) list.push_back({std::move(s), std::move(modes), {}});
+                                  [&c](const Candidate& other) { return other.modes == c.modes; });
+    if (!seen && pool > wanted && !can_hold(scene, hints, c, shared)) continue;
+    ++taken;
+    if (!seen) list.push_back(std::move(c));
   }
-  time_warm_starts(scene, hints, list);
   return list;
 }
 
@@ -227,13 +257,17 @@ void StrategyQpPlanner::follow_screened(const Scenario& scene, const expert::Pla
 expert::LaneChangeSolution StrategyQpPlanner::screen_one(
     const Scenario& scene, const expert::PlanHints& hints, const Candidate& c, double cutoff,
     expert::LinearizedRound& first, expert::LaneChangeWorkspace* workspace) const {
+  expert::MiqpSettings settings;
+  settings.objective_cutoff = cutoff;
+  if (c.first) {
+    return screen_solver_.solve(c.first->qp, settings,
+                                {workspace, &c.modes, &c.first->point.controls});
+  }
   // Candidates with a start of their own each have their linearization;
   // the others share the plan's.
   if (first.point.states.empty() || !c.start.states.empty()) {
     first = fixed_.first_round(scene, {c.first_point(hints), nullptr});
   }
-  expert::MiqpSettings settings;
-  settings.objective_cutoff = cutoff;
   return screen_solver_.solve(first.qp, settings, {workspace, &c.modes, &first.point.controls});
 }
 
@@ -252,7 +286,7 @@ void StrategyQpPlanner::search_neighbours(const Scenario& scene, const expert::P
     std::vector<int> modes = modes_of_strategy(s, scene.steps, rule);
     if (std::find(tried.begin(), tried.end(), modes) != tried.end()) continue;
     tried.push_back(modes);
-    list.push_back({std::move(s), std::move(modes), {}});
+    list.push_back({std::move(s), std::move(modes), {}, {}});
   }
   // Every neighbour is screened at the plan's own linearization: a fixed
   // point of its rounds, and close to the neighbours' own.
@@ -311,7 +345,7 @@ StrategyPlan StrategyQpPlanner::plan(const Scenario& scene, const expert::PlanLi
 CandidateOutcome StrategyQpPlanner::assess_strategy(const Scenario& scene,
                                                     const learn::Strategy& strategy) const {
   const LaneRule rule = effective_config(config_, scene).expert.lane_rule;
-  std::vector<Candidate> one{{strategy, modes_of_strategy(strategy, scene.steps, rule), {}}};
+  std::vector<Candidate> one{{strategy, modes_of_strategy(strategy, scene.steps, rule), {}, {}}};
   time_warm_starts(scene, {}, one);
   expert::ExpertResult plan;
   CandidateOutcome o =

@@ -88,15 +88,24 @@ class StrategyQpPlanner final : public ClosedLoopPlanner {
     /// from (StrategyQpSettings::timed_warm_start), else empty.
     expert::Iterate start;
     /// The path its rounds start from: its own, else the plan's hint.
+    /// Its first round's linearization at first_point, when the vote pool's
+    /// check made it (StrategyQpSettings::vote_pool): the screen reuses it.
+    std::shared_ptr<const expert::LinearizedRound> first;
     [[nodiscard]] const expert::Iterate* first_point(const expert::PlanHints& hints) const {
       return start.states.empty() ? hints.path : &start;
     }
   };
+  using Linearization = std::shared_ptr<const expert::LinearizedRound>;
+  /// Gives `c` its first round (`shared` for every candidate without a start
+  /// of its own, made once) and says whether its modes can hold there.
+  [[nodiscard]] bool can_hold(const Scenario& scene, const expert::PlanHints& hints, Candidate& c,
+                              Linearization& shared) const;
   /// Gives each candidate its timed warm start where the plan has no path.
   void time_warm_starts(const Scenario& scene, const expert::PlanHints& hints,
                         std::vector<Candidate>& list) const;
   /// The predicted strategies (after the last plan's modes, in closed loop),
-  /// each once on this horizon.
+  /// each once on this horizon, the first `candidates` of the vote pool that
+  /// can hold.
   [[nodiscard]] std::vector<Candidate> candidates_of(const Scenario& scene,
                                                      const expert::PlanHints& hints) const;
   /// Runs the candidates' rounds in the list's order; follows the cheapest,

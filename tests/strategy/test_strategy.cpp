@@ -260,18 +260,66 @@ TEST(Strategy, TheVoteRanksTheNearestScenesStrategiesFirst) {
 }
 
 TEST(Strategy, AnInfeasiblePredictionFallsBackToTheExactAnswer) {
-  const Config config = testing::untimed_config();
+  Config config = testing::untimed_config();
   const Scenario s = testing::open_road_scenario();
-  const planner::StrategyQpPlanner p(config, model_of({s}, {"2"}));
-  const planner::StrategyPlan learned = p.plan(s);
-  ASSERT_EQ(learned.candidates.size(), 1u);
-  EXPECT_FALSE(learned.candidates[0].feasible());
-  EXPECT_EQ(learned.chosen, -1);
-  const ExpertResult exact = p.exact().plan(s);
+  // "2": the target lane from the first node, 0.1 s after the start.
+  const auto model = model_of({s}, {"2"});
+  const ExpertResult exact = planner::StrategyQpPlanner(config, model).exact().plan(s);
   ASSERT_EQ(exact.status, PlanStatus::Converged);
-  EXPECT_EQ(learned.result.status, PlanStatus::Converged);
-  EXPECT_NEAR(learned.result.objective, exact.objective, 1e-6 * (1.0 + exact.objective));
-  EXPECT_EQ(learned.result.modes, exact.modes);
+  // Solved as a candidate (no vote pool), and refused before any QP (the
+  // default pool): either way the plan is the exact search's.
+  for (const int pool : {config.strategy_qp.candidates, config.strategy_qp.vote_pool}) {
+    config.strategy_qp.vote_pool = pool;
+    const planner::StrategyPlan learned = planner::StrategyQpPlanner(config, model).plan(s);
+    const bool checked = pool > config.strategy_qp.candidates;
+    ASSERT_EQ(learned.candidates.size(), checked ? 0U : 1U) << pool;
+    if (!checked) {
+      EXPECT_FALSE(learned.candidates[0].feasible());
+    }
+    EXPECT_EQ(learned.chosen, -1);
+    EXPECT_EQ(learned.result.status, PlanStatus::Converged);
+    EXPECT_NEAR(learned.result.objective, exact.objective, 1e-6 * (1.0 + exact.objective));
+    EXPECT_EQ(learned.result.modes, exact.modes);
+  }
+}
+
+TEST(Strategy, AVoteTheReachableStatesRuleOutTakesNoPlace) {
+  Config config = testing::untimed_config();
+  const Scenario s = testing::open_road_scenario();
+  const auto [exact, truth] = exact_plan_of(s, config);
+  ASSERT_EQ(exact.status, PlanStatus::Converged);
+  // The nearest row votes for the target lane at once, the next for the
+  // optimum's strategy; one candidate is solved.
+  Scenario farther = s;
+  farther.target.x += 5.0;
+  const auto model = model_of({s, farther}, {"2", truth});
+  ASSERT_EQ(model->predict(s, 2).front(), "2");
+  config.strategy_qp.candidates = 1;
+  const expert::ExpertPlanner fixed(config, std::make_shared<expert::FixedModeLaneChangeSolver>());
+  const expert::LinearizedRound first = fixed.first_round(s);
+  EXPECT_FALSE(expert::lane_modes_can_hold(
+      first.qp, planner::modes_of_strategy("2", s.steps, config.expert.lane_rule)));
+  EXPECT_TRUE(expert::lane_modes_can_hold(
+      first.qp, planner::modes_of_strategy(truth, s.steps, config.expert.lane_rule)));
+  config.strategy_qp.vote_pool = 1;
+  const planner::StrategyPlan top = planner::StrategyQpPlanner(config, model).plan(s);
+  ASSERT_EQ(top.candidates.size(), 1U);
+  EXPECT_EQ(top.candidates[0].strategy, "2");
+  EXPECT_EQ(top.chosen, -1);  // the exact search
+  config.strategy_qp.vote_pool = 2;
+  const planner::StrategyPlan pooled = planner::StrategyQpPlanner(config, model).plan(s);
+  ASSERT_EQ(pooled.candidates.size(), 1U);
+  EXPECT_EQ(pooled.candidates[0].strategy, truth);
+  ASSERT_EQ(pooled.chosen, 0);
+  EXPECT_NEAR(pooled.result.objective, exact.objective, 0.01 * exact.objective);
+  // A bad pool size is refused with the field's name.
+  config.strategy_qp.vote_pool = 0;
+  try {
+    config.validate();
+    ADD_FAILURE() << "vote_pool 0 was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("vote_pool"), std::string::npos) << e.what();
+  }
 }
 
 TEST(Strategy, AGoodPredictionIsFollowedWithTheExactCost) {

@@ -113,6 +113,13 @@ class FixedModeLaneChangeSolver final : public LaneChangeSolver {
   FixedModeSettings settings_;
 };
 
+/// What FixedModeLaneChangeSolver::solve checks before any QP: the modes fit
+/// `qp`, its initial state meets the lane rules, and bound tightening over the
+/// round's dynamics, boxes and mode rows leaves a state at every node. False
+/// proves the modes infeasible in this round, in microseconds; true proves
+/// nothing. strategy-qp skips the votes it refuses (docs/strategy.md).
+[[nodiscard]] bool lane_modes_can_hold(const LaneChangeQp& qp, const std::vector<int>& modes);
+
 /// The solver named `name`: "fast" or "reference".
 [[nodiscard]] std::shared_ptr<const LaneChangeSolver> make_lane_change_solver(std::string_view name,
                                                                               double big_m);
