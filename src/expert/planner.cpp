@@ -110,14 +110,17 @@ LaneChangeQp linearized_qp(const Scenario& scenario, const Config& config, int p
   return build_lane_change_qp(scenario, config, point, prediction);
 }
 
+bool hint_path_fits(const Scenario& scenario, const PlanHints& hints) {
+  const auto nodes = static_cast<std::size_t>(scenario.steps) + 1;
+  return hints.path != nullptr && hints.path->states.size() == nodes &&
+         hints.path->controls.size() == nodes - 1;
+}
+
 // The first linearization point: the hint's path where it fits, else the
 // configured warm start.
 Iterate first_point(const Scenario& scenario, const Config& config, const PlanHints& hints,
                     const TrafficPrediction& prediction) {
-  const auto nodes = static_cast<std::size_t>(scenario.steps) + 1;
-  const bool path_fits = hints.path != nullptr && hints.path->states.size() == nodes &&
-                         hints.path->controls.size() == nodes - 1;
-  return path_fits ? *hints.path : warm_start(scenario, config, prediction);
+  return hint_path_fits(scenario, hints) ? *hints.path : warm_start(scenario, config, prediction);
 }
 
 int predicted_steps_of(const Scenario& scenario, const Config& config) {
@@ -178,8 +181,10 @@ void adopt(ExpertResult& result, const RoundSolution& round) {
 
 // The paper's successive linearization. Returns with a final status, or with
 // Cycling or IterationLimit and `previous` holding the linearization point of
-// the last round (the trust region starts from there).
-void plain_rounds(const RoundContext& c, Iterate point, ExpertResult& result, Iterate& previous) {
+// the last round (the trust region starts from there). With `point_is_plan`
+// (PlanHints::path_is_plan) the first round may converge on `point`.
+void plain_rounds(const RoundContext& c, Iterate point, ExpertResult& result, Iterate& previous,
+                  bool point_is_plan) {
   const ExpertSettings& e = c.config.expert;
   Iterate two_back;  // the solution of the round before the last
   for (int round = 1; round <= e.max_iterations; ++round) {
@@ -191,14 +196,18 @@ void plain_rounds(const RoundContext& c, Iterate point, ExpertResult& result, It
       fail_round(result, solution);
       return;
     }
+    // A round converges when its solution lies within the tolerance of the
+    // path it was linearized about: the round before's, or a given plan.
     if (round > 1) report.max_change = largest_position_change(solution.path, result.path);
+    if (round == 1 && point_is_plan)
+      report.max_change = largest_position_change(solution.path, point);
     const double repeat = round > 2 ? largest_position_change(solution.path, two_back) : kInfinity;
     const bool cycling = repeat <= e.cycle_tolerance && report.max_change > e.convergence_tolerance;
     result.rounds.push_back(report);
     two_back = std::move(result.path);
     adopt(result, round_solution);
     point = solution.path;
-    if (round > 1 && report.max_change <= e.convergence_tolerance) {
+    if (report.max_change <= e.convergence_tolerance) {
       result.status = PlanStatus::Converged;
       return;
     }
@@ -369,7 +378,8 @@ ExpertResult ExpertPlanner::plan(const Scenario& scenario, const PlanLimits& lim
   ExpertResult result;
   result.prediction = predict_traffic(scenario, config, context.predicted_steps, dt);
   Iterate previous;
-  plain_rounds(context, first_point(scenario, config, hints, result.prediction), result, previous);
+  plain_rounds(context, first_point(scenario, config, hints, result.prediction), result, previous,
+               hints.path_is_plan && hint_path_fits(scenario, hints));
   const bool failed_to_converge =
       result.status == PlanStatus::Cycling || result.status == PlanStatus::IterationLimit;
   if (failed_to_converge && config.expert.globalisation == Globalisation::TrustRegion) {

@@ -100,7 +100,7 @@ std::string MiqpSession::replan(const Observation& o) {
   if (plan_) {
     guess = shifted(*plan_, o.step - plan_step_, scene.steps, dt);
     modes = shifted(modes_, o.step - plan_step_, scene.steps);
-    hints = {&guess, &modes};
+    hints = {&guess, &modes, true};
   }
   const ExpertResult result =
       plan_function_(scene, {config_.closed_loop.step_budget_ms / 1000.0}, hints);

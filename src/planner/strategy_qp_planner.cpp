@@ -184,7 +184,8 @@ void StrategyQpPlanner::follow_in_order(const Scenario& scene, const expert::Pla
   expert::ExpertResult plan;
   for (const Candidate& c : list) {
     CandidateOutcome o =
-        solve_candidate(scene, c.modes, limits, {c.first_point(hints), hints.modes}, plan);
+        solve_candidate(scene, c.modes, limits,
+                        {c.first_point(hints), hints.modes, c.starts_from_plan(hints)}, plan);
     o.strategy = c.strategy;
     const bool taken = take_candidate(o, c.modes, plan, out, rescued_hint);
     out.candidates.push_back(std::move(o));
@@ -240,8 +241,9 @@ void StrategyQpPlanner::follow_screened(const Scenario& scene, const expert::Pla
     // The rounds go on from the screened solution: it is the first round's.
     // A candidate cut off in the screen has none, and starts where its
     // screen did.
-    const expert::PlanHints from_screen{
-        screens[i].has_solution() ? &screens[i].path : list[i].first_point(hints), nullptr};
+    const bool screened = screens[i].has_solution();
+    const expert::PlanHints from_screen{screened ? &screens[i].path : list[i].first_point(hints),
+                                        nullptr, screened || list[i].starts_from_plan(hints)};
     CandidateOutcome& o = out.candidates[i];
     const std::string strategy = o.strategy;
     const double screen_objective = o.screen_objective;
@@ -291,7 +293,7 @@ void StrategyQpPlanner::search_neighbours(const Scenario& scene, const expert::P
   // Every neighbour is screened at the plan's own linearization: a fixed
   // point of its rounds, and close to the neighbours' own.
   const expert::Iterate at_plan = out.result.path;
-  const expert::PlanHints from_plan{&at_plan, nullptr};
+  const expert::PlanHints from_plan{&at_plan, nullptr, true};
   const auto workspace = screen_solver_.make_workspace();
   expert::LinearizedRound first;
   expert::ExpertResult plan;
@@ -305,7 +307,7 @@ void StrategyQpPlanner::search_neighbours(const Scenario& scene, const expert::P
         screen.status == expert::MiqpStatus::Optimal || screen.status == expert::MiqpStatus::Cutoff;
     if (!has_point) o.status = expert::PlanStatus::Infeasible;
     if (screen.status == expert::MiqpStatus::Optimal && screen.objective < out.result.objective) {
-      o = solve_candidate(scene, c.modes, limits, {&screen.path, nullptr}, plan);
+      o = solve_candidate(scene, c.modes, limits, {&screen.path, nullptr, true}, plan);
       if (take_candidate(o, c.modes, plan, out, unused_hint)) {
         out.chosen = static_cast<int>(out.candidates.size());
       }
@@ -333,8 +335,9 @@ StrategyPlan StrategyQpPlanner::plan(const Scenario& scene, const expert::PlanLi
   if (out.chosen < 0) {
     // No candidate holds: the exact search, started from the likeliest modes.
     if (rescued_hint.empty() && !list.empty()) rescued_hint = list.front().modes;
-    out.result =
-        exact_.plan(scene, limits, {hints.path, rescued_hint.empty() ? nullptr : &rescued_hint});
+    out.result = exact_.plan(
+        scene, limits,
+        {hints.path, rescued_hint.empty() ? nullptr : &rescued_hint, hints.path_is_plan});
     out.qp_iterations += qp_iterations_of(out.result);
   }
   out.total_ms = ms_since(start);

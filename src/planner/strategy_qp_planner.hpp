@@ -94,6 +94,10 @@ class StrategyQpPlanner final : public ClosedLoopPlanner {
     [[nodiscard]] const expert::Iterate* first_point(const expert::PlanHints& hints) const {
       return start.states.empty() ? hints.path : &start;
     }
+    /// Whether first_point is a plan's path (PlanHints::path_is_plan).
+    [[nodiscard]] bool starts_from_plan(const expert::PlanHints& hints) const {
+      return start.states.empty() && hints.path_is_plan;
+    }
   };
   using Linearization = std::shared_ptr<const expert::LinearizedRound>;
   /// Gives `c` its first round (`shared` for every candidate without a start

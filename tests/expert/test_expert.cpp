@@ -382,6 +382,33 @@ TEST(Planner, WideOpenGapIsWellPosed) {
   }
 }
 
+TEST(Planner, AFirstRoundOnAPlanConvergesThere) {
+  const Scenario s = open_road_scenario(Behavior::ConstantSpeed);
+  const ExpertPlanner planner(Config{}, std::make_shared<FastLaneChangeSolver>());
+  const ExpertResult plan = planner.plan(s);
+  ASSERT_EQ(plan.status, PlanStatus::Converged) << plan.reason;
+  ASSERT_GE(plan.iterations(), 2);
+  // From its own converged path, one round is the plan again when the path
+  // is declared a plan; as a mere guess it takes a second round to show it.
+  for (const bool is_plan : {true, false}) {
+    const ExpertResult again = planner.plan(s, {}, {&plan.path, &plan.modes, is_plan});
+    ASSERT_EQ(again.status, PlanStatus::Converged) << again.reason;
+    EXPECT_EQ(again.iterations(), is_plan ? 1 : 2);
+    if (is_plan) {
+      EXPECT_LE(again.rounds.front().max_change, Config{}.expert.convergence_tolerance);
+    } else {
+      EXPECT_TRUE(std::isinf(again.rounds.front().max_change));  // nothing to compare with
+    }
+    EXPECT_NEAR(again.objective, plan.objective, 1e-3 * (1.0 + plan.objective));
+  }
+  // A path far from the plan (the warm start) does not converge at once, plan or not.
+  const Iterate guess = warm_start(s, Config{}, plan.prediction);
+  const ExpertResult from_guess = planner.plan(s, {}, {&guess, nullptr, true});
+  ASSERT_EQ(from_guess.status, PlanStatus::Converged) << from_guess.reason;
+  EXPECT_GE(from_guess.iterations(), 2);
+  EXPECT_NEAR(from_guess.objective, plan.objective, 1e-3 * (1.0 + plan.objective));
+}
+
 TEST(Planner, NoGapIsAFailure) {
   const Scenario s = no_gap_scenario();
   const ExpertPlanner planner(Config{}, std::make_shared<FastLaneChangeSolver>());

@@ -66,6 +66,12 @@ struct PlanLimits {
 struct PlanHints {
   const Iterate* path = nullptr;            ///< the first linearization point
   const std::vector<int>* modes = nullptr;  ///< lane modes per node, for the first round
+  /// The path is a plan's (a round's solution, or the last plan shifted by
+  /// the steps since): the first round then converges as every later one
+  /// does, when its solution lies within the tolerance of the path it was
+  /// linearized about. A warm start's guess is no plan, and the first round
+  /// from it never converges.
+  bool path_is_plan = false;
 };
 
 /// The initial guess (config.expert.warm_start) for a scenario.
