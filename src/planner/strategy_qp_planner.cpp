@@ -205,7 +205,26 @@ void StrategyQpPlanner::follow_screened(const Scenario& scene, const expert::Pla
   std::vector<expert::LaneChangeSolution> screens;
   std::vector<std::size_t> order;
   double best_screen = expert::kInfinity;
+  expert::ExpertResult plan;
+  int held = 0;
+  // Closed loop: the last plan's modes, from its own path, mostly converge in
+  // one round. Their rounds run first and the votes are screened against that
+  // plan's cost, which saves the last modes' screen QP.
+  const bool last_plan_first = !list.empty() && list.front().strategy.empty() &&
+                               list.front().starts_from_plan(hints) && hints.path != nullptr;
+  if (last_plan_first) {
+    CandidateOutcome o =
+        solve_candidate(scene, list.front().modes, limits, {hints.path, nullptr, true}, plan);
+    if (take_candidate(o, list.front().modes, plan, out, rescued_hint)) {
+      out.chosen = 0;
+      held = 1;
+      best_screen = out.result.objective;
+    }
+    out.candidates.push_back(std::move(o));
+    screens.emplace_back();
+  }
   for (const Candidate& c : list) {
+    if (last_plan_first && &c == &list.front()) continue;
     // A candidate proven dearer than the best so far ranks after it: the
     // bound that proves it is enough, and the rest of its QP is saved.
     double cutoff = expert::kInfinity;
@@ -231,8 +250,6 @@ void StrategyQpPlanner::follow_screened(const Scenario& scene, const expert::Pla
   std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
     return out.candidates[a].screen_objective < out.candidates[b].screen_objective;
   });
-  expert::ExpertResult plan;
-  int held = 0;
   for (std::size_t i : order) {
     if (config_.strategy_qp.skip_dearer && out.chosen >= 0 &&
         out.candidates[i].screen_objective >= out.result.objective) {
