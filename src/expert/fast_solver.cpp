@@ -196,15 +196,15 @@ void build_node(const LaneChangeQp& qp, const std::vector<int>& modes, unsigned 
       }
     }
     if (k == 0 || qp.node_modes[k].empty()) continue;  // the initial state is fixed: checked apart
-    if (modes[k] != kFree) {
-      for (const HalfSpace& h : qp.node_modes[k][modes[k]].rows) add_row(st, h.g, h.upper, true);
-      continue;
-    }
+    // A node whose mode is fixed, or the only one it can reach, is in that
+    // mode: its rows are no choice, and those that every reachable state
+    // meets need not be written.
     const unsigned possible = ws.possible_modes[k];
-    if (std::popcount(possible) == 1) {
-      // A node with one reachable mode is in it: its rows are no choice, and
-      // those that every reachable state meets need not be written.
-      for (const HalfSpace& h : qp.node_modes[k][std::countr_zero(possible)].rows) {
+    const int fixed = modes[k] != kFree              ? modes[k]
+                      : std::popcount(possible) == 1 ? std::countr_zero(possible)
+                                                     : kFree;
+    if (fixed != kFree) {
+      for (const HalfSpace& h : qp.node_modes[k][fixed].rows) {
         if (-least_over_box(-h.g, ws.reach_lower[k], ws.reach_upper[k]) > h.upper) {
           add_row(st, h.g, h.upper, true);
         }
@@ -375,8 +375,6 @@ void next_box(const LaneChangeQp& qp, int k, State& lo, State& hi) {
 
 void find_possible_modes(const LaneChangeQp& qp, FastWorkspace& ws) {
   const int n = qp.steps;
-  ws.reach_lower.assign(n + 1, State::Constant(-kInfinity));
-  ws.reach_upper.assign(n + 1, State::Constant(kInfinity));
   State lo = qp.initial_state;
   State hi = qp.initial_state;
   for (int k = 0; k < n; ++k) {
@@ -447,6 +445,8 @@ void prepare_round(const LaneChangeQp& qp, const SolveHints& hints, FastWorkspac
     u = u.cwiseMax(qp.control_lower + margin).cwiseMin(qp.control_upper - margin);
   }
   ws.possible_modes.assign(n + 1, ~0U);
+  ws.reach_lower.assign(n + 1, State::Constant(-kInfinity));
+  ws.reach_upper.assign(n + 1, State::Constant(kInfinity));
   if (reachable_modes) find_possible_modes(qp, ws);
 }
 
