@@ -298,6 +298,10 @@ struct StrategyQpSettings {
   /// Screen with rough QPs (FixedModeSettings::rough): about half the
   /// iterations, and only the ranking depends on them.
   bool rough_screen = true;
+  /// Where a rough screen QP stops (complementarity, rows and slack): 1e-2
+  /// takes about a sixth fewer iterations per plan than 1e-3, at a median
+  /// cost 0.0002 higher (docs/strategy.md, stop 26). In (0, 1).
+  double screen_tolerance = 1e-2;
   /// Stop a candidate's screen QP once its lower bound passes the cheapest
   /// screened so far (MiqpSettings::objective_cutoff): it ranks after it
   /// either way.

@@ -200,6 +200,7 @@ void visit_fields(V& v, S& s) requires std::same_as<std::remove_const_t<S>, Stra
   v("screen", s.screen);
   v("screen_keep", s.screen_keep);
   v("rough_screen", s.rough_screen);
+  v("screen_tolerance", s.screen_tolerance);
   v("screen_cutoff", s.screen_cutoff);
   v("skip_dearer", s.skip_dearer);
   v("neighbour_nodes", s.neighbour_nodes);

@@ -259,7 +259,10 @@ NodeOutcome solve_node_with(const LaneChangeQp& qp, const std::vector<int>& mode
     // point tells where as well as the optimum does.
     settings.coarse_below = qp_cutoff - 1e-2 * (1.0 + std::abs(cutoff));
   }
-  if (precision == NodePrecision::Rough) settings.coarse_below = kInfinity;
+  if (precision == NodePrecision::Rough) {
+    settings.coarse_below = kInfinity;
+    settings.coarse_tolerance = ws.rough_tolerance;
+  }
   const QpResult r = solve_structured_qp(ws.node, ws.qp_workspace, settings);
   NodeOutcome out;
   out.iterations = r.iterations;

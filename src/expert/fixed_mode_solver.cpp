@@ -70,6 +70,7 @@ LaneChangeSolution FixedModeLaneChangeSolver::solve(const LaneChangeQp& qp,
   // A plan's next round solves nearly the same QP: its interior-point
   // method starts from the last one's multipliers where the rows match.
   ws.warm_start_qp = true;
+  ws.rough_tolerance = settings_.rough_tolerance;
   // Node 0's mode is not a choice (its state is given), so it stays free.
   std::vector<int> modes = *hints.modes;
   modes[0] = detail::kFreeMode;

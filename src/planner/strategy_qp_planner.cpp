@@ -69,7 +69,11 @@ StrategyQpPlanner::StrategyQpPlanner(Config config,
     : config_(closed_loop_expert(std::move(config))),
       model_(std::move(model)),
       fixed_(config_, std::make_shared<expert::FixedModeLaneChangeSolver>()),
-      screen_solver_(expert::FixedModeSettings{config_.strategy_qp.rough_screen}),
+      screen_solver_(expert::FixedModeSettings{config_.strategy_qp.rough_screen,
+                                               config_.strategy_qp.screen_tolerance}),
+      neighbour_screen_solver_(expert::FixedModeSettings{
+          config_.strategy_qp.rough_screen, std::min(config_.strategy_qp.screen_tolerance,
+                                                     expert::FixedModeSettings{}.rough_tolerance)}),
       exact_(config_, std::make_shared<expert::FastLaneChangeSolver>()) {
   if (!model_) throw InputError("--model", "strategy-qp needs a lane-strategy model");
 }
@@ -229,7 +233,8 @@ void StrategyQpPlanner::follow_screened(const Scenario& scene, const expert::Pla
     // bound that proves it is enough, and the rest of its QP is saved.
     double cutoff = expert::kInfinity;
     if (config_.strategy_qp.screen_cutoff) cutoff = best_screen;
-    screens.push_back(screen_one(scene, hints, c, cutoff, first, workspace.get()));
+    screens.push_back(
+        screen_one(scene, hints, c, cutoff, first, {screen_solver_, workspace.get()}));
     out.qp_iterations += screens.back().qp_iterations;
     CandidateOutcome o;
     o.strategy = c.strategy;
@@ -273,21 +278,24 @@ void StrategyQpPlanner::follow_screened(const Scenario& scene, const expert::Pla
   }
 }
 
-expert::LaneChangeSolution StrategyQpPlanner::screen_one(
-    const Scenario& scene, const expert::PlanHints& hints, const Candidate& c, double cutoff,
-    expert::LinearizedRound& first, expert::LaneChangeWorkspace* workspace) const {
+expert::LaneChangeSolution StrategyQpPlanner::screen_one(const Scenario& scene,
+                                                         const expert::PlanHints& hints,
+                                                         const Candidate& c, double cutoff,
+                                                         expert::LinearizedRound& first,
+                                                         const Screener& screener) const {
   expert::MiqpSettings settings;
   settings.objective_cutoff = cutoff;
   if (c.first) {
-    return screen_solver_.solve(c.first->qp, settings,
-                                {workspace, &c.modes, &c.first->point.controls});
+    return screener.solver.solve(c.first->qp, settings,
+                                 {screener.workspace, &c.modes, &c.first->point.controls});
   }
   // Candidates with a start of their own each have their linearization;
   // the others share the plan's.
   if (first.point.states.empty() || !c.start.states.empty()) {
     first = fixed_.first_round(scene, {c.first_point(hints), nullptr});
   }
-  return screen_solver_.solve(first.qp, settings, {workspace, &c.modes, &first.point.controls});
+  return screener.solver.solve(first.qp, settings,
+                               {screener.workspace, &c.modes, &first.point.controls});
 }
 
 void StrategyQpPlanner::search_neighbours(const Scenario& scene, const expert::PlanLimits& limits,
@@ -311,13 +319,14 @@ void StrategyQpPlanner::search_neighbours(const Scenario& scene, const expert::P
   // point of its rounds, and close to the neighbours' own.
   const expert::Iterate at_plan = out.result.path;
   const expert::PlanHints from_plan{&at_plan, nullptr, true};
-  const auto workspace = screen_solver_.make_workspace();
+  const auto workspace = neighbour_screen_solver_.make_workspace();
   expert::LinearizedRound first;
   expert::ExpertResult plan;
   std::vector<int> unused_hint;
   for (const Candidate& c : list) {
     const expert::LaneChangeSolution screen =
-        screen_one(scene, from_plan, c, out.result.objective, first, workspace.get());
+        screen_one(scene, from_plan, c, out.result.objective, first,
+                   {neighbour_screen_solver_, workspace.get()});
     out.qp_iterations += screen.qp_iterations;
     CandidateOutcome o;
     const bool has_point =

@@ -122,14 +122,19 @@ class StrategyQpPlanner final : public ClosedLoopPlanner {
   void follow_screened(const Scenario& scene, const expert::PlanLimits& limits,
                        const expert::PlanHints& hints, const std::vector<Candidate>& list,
                        StrategyPlan& out, std::vector<int>& rescued_hint) const;
-  /// The first round's QP of `c` solved with its modes fixed and
-  /// `cutoff`, roughly when screen_solver_ is; `first` holds the shared
-  /// linearization and is rebuilt when `c` has a start of its own.
+  /// A screen's solver (screen_solver_ or neighbour_screen_solver_) and its workspace.
+  struct Screener {
+    const expert::FixedModeLaneChangeSolver& solver;
+    expert::LaneChangeWorkspace* workspace;
+  };
+  /// The first round's QP of `c` solved with its modes fixed and `cutoff`
+  /// by `screener`; `first` holds the shared linearization and is rebuilt
+  /// when `c` has a start of its own.
   [[nodiscard]] expert::LaneChangeSolution screen_one(const Scenario& scene,
                                                       const expert::PlanHints& hints,
                                                       const Candidate& c, double cutoff,
                                                       expert::LinearizedRound& first,
-                                                      expert::LaneChangeWorkspace* workspace) const;
+                                                      const Screener& screener) const;
   /// neighbour_nodes: tries the followed strategy's neighbours.
   void search_neighbours(const Scenario& scene, const expert::PlanLimits& limits,
                          StrategyPlan& out) const;
@@ -147,6 +152,9 @@ class StrategyQpPlanner final : public ClosedLoopPlanner {
   std::shared_ptr<const learn::StrategyModel> model_;
   expert::ExpertPlanner fixed_;  ///< the expert's rounds with the fixed-mode solver
   expert::FixedModeLaneChangeSolver screen_solver_;
+  /// Neighbours cost within tenths of a percent of the plan: their screen
+  /// needs at least the default rough precision (1e-3).
+  expert::FixedModeLaneChangeSolver neighbour_screen_solver_;
   expert::ExpertPlanner exact_;
 };
 

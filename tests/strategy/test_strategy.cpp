@@ -63,6 +63,16 @@ ExactPlan exact_plan_of(const Scenario& s, const Config& config) {
   return out;
 }
 
+// `config` fails validation with a message naming `field`.
+void expect_refused(const Config& config, const std::string& field) {
+  try {
+    config.validate();
+    ADD_FAILURE() << field << ": the bad value was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find(field), std::string::npos) << e.what();
+  }
+}
+
 TEST(Strategy, LaneModeIndicesFollowTheFormulation) {
   const Scenario s = testing::open_road_scenario();
   for (LaneRule rule : {LaneRule::EitherOr, LaneRule::Footprint}) {
@@ -283,6 +293,37 @@ TEST(Strategy, AnInfeasiblePredictionFallsBackToTheExactAnswer) {
   }
 }
 
+TEST(Strategy, ALooserScreenStopsSoonerNearTheSameCost) {
+  const Config config = testing::untimed_config();
+  const Scenario s = testing::open_road_scenario();
+  const auto [exact, truth] = exact_plan_of(s, config);
+  ASSERT_EQ(exact.status, PlanStatus::Converged);
+  const std::vector<int> modes =
+      planner::modes_of_strategy(truth, s.steps, config.expert.lane_rule);
+  const expert::ExpertPlanner planner(config,
+                                      std::make_shared<expert::FixedModeLaneChangeSolver>());
+  const expert::LinearizedRound first = planner.first_round(s);
+  const auto solve = [&](expert::FixedModeSettings settings) {
+    return expert::FixedModeLaneChangeSolver(settings).solve(first.qp, {},
+                                                             {nullptr, &modes, nullptr});
+  };
+  const auto precise = solve({false, 1e-3});
+  const auto rough = solve({true, 1e-3});
+  const auto rougher = solve({true, Config{}.strategy_qp.screen_tolerance});
+  for (const auto* r : {&precise, &rough, &rougher}) {
+    ASSERT_EQ(r->status, expert::MiqpStatus::Optimal) << r->message;
+  }
+  EXPECT_LT(rough.qp_iterations, precise.qp_iterations);
+  EXPECT_LT(rougher.qp_iterations, rough.qp_iterations);
+  // A rough point may sit a little off the optimum (rows within the
+  // tolerance), never far: the ranking it serves holds.
+  EXPECT_NEAR(rougher.objective, precise.objective, 0.01 * (1.0 + precise.objective));
+  // A tolerance outside (0, 1) is refused with the field's name.
+  Config bad = config;
+  bad.strategy_qp.screen_tolerance = 0.0;
+  expect_refused(bad, "screen_tolerance");
+}
+
 TEST(Strategy, AVoteTheReachableStatesRuleOutTakesNoPlace) {
   Config config = testing::untimed_config();
   const Scenario s = testing::open_road_scenario();
@@ -314,12 +355,7 @@ TEST(Strategy, AVoteTheReachableStatesRuleOutTakesNoPlace) {
   EXPECT_NEAR(pooled.result.objective, exact.objective, 0.01 * exact.objective);
   // A bad pool size is refused with the field's name.
   config.strategy_qp.vote_pool = 0;
-  try {
-    config.validate();
-    ADD_FAILURE() << "vote_pool 0 was accepted";
-  } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("vote_pool"), std::string::npos) << e.what();
-  }
+  expect_refused(config, "vote_pool");
 }
 
 TEST(Strategy, AGoodPredictionIsFollowedWithTheExactCost) {

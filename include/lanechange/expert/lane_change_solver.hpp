@@ -95,10 +95,12 @@ class FastLaneChangeSolver final : public LaneChangeSolver {
 /// solution's modes are the given ones, so the next round keeps them.
 /// Shares FastLaneChangeSolver's workspace type.
 struct FixedModeSettings {
-  /// Stop at the first iterate within 1e-3 of the optimum (complementarity,
-  /// rows and slack): enough to rank candidate modes, as strategy-qp's screen
-  /// does, in about half the iterations; not a plan to follow.
+  /// Stop at the first iterate within `rough_tolerance` of the optimum
+  /// (complementarity, rows and slack): enough to rank candidate modes, as
+  /// strategy-qp's screen does, in about half the iterations; not a plan to
+  /// follow.
   bool rough = false;
+  double rough_tolerance = 1e-3;
 };
 
 class FixedModeLaneChangeSolver final : public LaneChangeSolver {
