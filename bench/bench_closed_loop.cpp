@@ -42,9 +42,21 @@ void BM_MlpMiqpStep(benchmark::State& state) {
 }
 void BM_MlpMiqpStepRolledOutEveryStep(benchmark::State& state) { run_mlp_miqp(state, 0.0); }
 
+// strategy-qp's re-plans (issue 14's 0.5 ms per plan): the same model
+// directory, its strategy part.
+void BM_StrategyQpStep(benchmark::State& state) {
+  const char* model = std::getenv("LANECHANGE_BENCH_MODEL");
+  if (model == nullptr) {
+    state.SkipWithError("set LANECHANGE_BENCH_MODEL to a model directory (lanechange train)");
+    return;
+  }
+  run_planner(state, "strategy-qp", model);
+}
+
 BENCHMARK(BM_MiqpClosedLoopStep)->Unit(benchmark::kMillisecond)->Iterations(1);
 BENCHMARK(BM_KeepLaneStep)->Unit(benchmark::kMillisecond)->Iterations(1);
 BENCHMARK(BM_MlpMiqpStep)->Unit(benchmark::kMillisecond)->Iterations(1);
+BENCHMARK(BM_StrategyQpStep)->Unit(benchmark::kMillisecond)->Iterations(1);
 BENCHMARK(BM_MlpMiqpStepRolledOutEveryStep)->Unit(benchmark::kMillisecond)->Iterations(1);
 
 }  // namespace

@@ -30,6 +30,7 @@ struct FastWorkspace final : LaneChangeWorkspace {
   // the round's dynamics, bounds and controls can reach leave the others out.
   std::vector<unsigned> possible_modes;
   std::vector<State> reach_lower, reach_upper;  // per node, the box of reachable states
+  void advance(int nodes) override { qp_workspace.advance(nodes); }
   [[nodiscard]] bool possible(int node, int mode) const {
     return ((possible_modes[static_cast<std::size_t>(node)] >> mode) & 1U) != 0;
   }

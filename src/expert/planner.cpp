@@ -363,13 +363,14 @@ ExpertResult ExpertPlanner::plan(const Scenario& scenario, const PlanLimits& lim
   const auto start = Clock::now();
   const Config config = effective_config(config_, scenario);
   const double dt = scenario.horizon / scenario.steps;
-  const auto workspace = solver_->make_workspace();
+  const auto owned = hints.workspace == nullptr ? solver_->make_workspace() : nullptr;
+  LaneChangeWorkspace* workspace = hints.workspace == nullptr ? owned.get() : hints.workspace;
   const auto nodes = static_cast<std::size_t>(scenario.steps) + 1;
   const bool modes_fit = hints.modes != nullptr && hints.modes->size() == nodes;
   const RoundContext context{scenario,
                              config,
                              *solver_,
-                             workspace.get(),
+                             workspace,
                              start,
                              limits.time_limit_s,
                              predicted_steps_of(scenario, config),

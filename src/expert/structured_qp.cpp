@@ -9,18 +9,53 @@ namespace lanechange::expert {
 using StateMatrix = Eigen::Matrix<double, kQpStates, kQpStates>;
 using GainMatrix = Eigen::Matrix<double, kQpControls, kQpStates>;
 
+void QpWorkspace::advance(int stages) { stages_since_solution_ += stages; }
+
+void QpWorkspace::carry_solution(const StructuredQp& qp) {
+  const int stages = qp.steps() + 1;
+  const int old_stages = static_cast<int>(row_offset_.size()) - 1;
+  std::vector<int>& offset = next_row_offset_;  // a member: setup runs per node of a search
+  offset.assign(static_cast<std::size_t>(stages) + 1, 0);
+  for (int k = 0; k < stages; ++k)
+    offset[k + 1] = offset[k] + static_cast<int>(qp.stages[k].rows.size());
+  const bool in_place = stages_since_solution_ == 0 && offset == row_offset_;
+  warm_stage_.assign(stages, in_place ? 1 : 0);
+  bool any = in_place;
+  if (has_solution_ && old_stages > 0 && !in_place) {
+    // Stage k of this problem lies where stage k + shift of the last one
+    // did (the last stage repeats past its end, as a shifted plan's does).
+    // A stage's multipliers fit only row for row: a stage whose row count
+    // changed starts centred.
+    std::vector<double> t(offset.back(), 0.0);
+    std::vector<double> lambda(t), sigma(t), lambda_soft(t);
+    for (int k = 0; k < stages; ++k) {
+      const int from = std::min(k + stages_since_solution_, old_stages - 1);
+      const int count = offset[k + 1] - offset[k];
+      if (row_offset_[from + 1] - row_offset_[from] != count) continue;
+      warm_stage_[k] = 1;
+      any = true;
+      for (int j = 0; j < count; ++j) {
+        const int i = offset[k] + j;
+        const int old = row_offset_[from] + j;
+        t[i] = t_[old];
+        lambda[i] = lambda_[old];
+        sigma[i] = sigma_[old];
+        lambda_soft[i] = lambda_soft_[old];
+      }
+    }
+    t_.swap(t);
+    lambda_.swap(lambda);
+    sigma_.swap(sigma);
+    lambda_soft_.swap(lambda_soft);
+  }
+  has_solution_ = has_solution_ && any;
+  stages_since_solution_ = 0;
+  row_offset_.swap(offset);
+}
+
 void QpWorkspace::setup(const StructuredQp& qp) {
   const int stages = qp.steps() + 1;
-  // The last solution's multipliers fit this problem only row for row.
-  bool same_rows = row_offset_.size() == static_cast<std::size_t>(stages) + 1;
-  row_offset_.resize(stages + 1);
-  row_offset_[0] = 0;
-  for (int k = 0; k < stages; ++k) {
-    const int next = row_offset_[k] + static_cast<int>(qp.stages[k].rows.size());
-    same_rows = same_rows && row_offset_[k + 1] == next;
-    row_offset_[k + 1] = next;
-  }
-  has_solution_ = has_solution_ && same_rows;
+  carry_solution(qp);
   const std::size_t rows = row_offset_.back();
   single_index_.assign(rows, -1);
   for (int k = 0; k < stages; ++k) {
@@ -157,50 +192,62 @@ struct InteriorPointMethod {
             st.A * ws.w_[k].head<kQpStates>() + st.B * ws.w_[k].tail<kQpControls>() + st.c;
       }
     }
-    if (settings.warm_start && ws.has_solution_) {
-      warm_rows();
+    // A warm start takes the stages whose rows the last solution has
+    // (QpWorkspace::carry_solution). The others start centred, at the warm
+    // rows' mean complementarity: centred at the cold start's, one stage
+    // would hold the whole method back to a cold start's pace.
+    const bool warm = settings.warm_start && ws.has_solution_;
+    double products = 0.0;
+    int warm_rows = 0;
+    if (warm) {
+      for_each_row([&](int k, const QpRow& row, int i) {
+        if (ws.warm_stage_[k] == 0) return;
+        warm_row(row, i, row.d - row_dot(row, i, ws.w_[k]));
+        products += ws.lambda_[i] * ws.t_[i];
+        ++warm_rows;
+      });
+    }
+    const double mu0 = warm_rows > 0 ? products / warm_rows : settings.initial_complementarity;
+    for_each_row([&](int k, const QpRow& row, int i) {
+      if (warm && ws.warm_stage_[k] != 0) return;
+      centred_row(row, i, row.d - row_dot(row, i, ws.w_[k]), mu0);
+    });
+  }
+
+  // The row starts centred, with lambda t (and a soft row's lambda_soft
+  // sigma) at mu0 (settings.initial_complementarity cold), its slacks at least 1 from
+  // their bounds, and a soft row on rho = lambda + lambda_soft (a residual
+  // there would swamp the Newton step with forces of the size of rho). A
+  // start with lambda = 1 everywhere and a violated soft row's t at 1e-2
+  // took steps of 1e-4 for the first five to eight iterations, until the
+  // products had evened out.
+  void centred_row(const QpRow& row, int i, double room, double mu0) {
+    if (!row.soft) {
+      ws.t_[i] = std::max(room, 1.0);
+      ws.lambda_[i] = mu0 / ws.t_[i];
       return;
     }
-    // Every row starts centred, with lambda t (and a soft row's
-    // lambda_soft sigma) at settings.initial_complementarity, its slacks at
-    // least 1 from their bounds, and a soft row on rho = lambda +
-    // lambda_soft (a residual there would swamp the Newton step with forces
-    // of the size of rho). A start with lambda = 1 everywhere and a violated
-    // soft row's t at 1e-2 took steps of 1e-4 for the first five to eight
-    // iterations, until the products had evened out.
-    const double mu0 = settings.initial_complementarity;
-    for_each_row([&](int k, const QpRow& row, int i) {
-      const double room = row.d - row_dot(row, i, ws.w_[k]);
-      if (!row.soft) {
-        ws.t_[i] = std::max(room, 1.0);
-        ws.lambda_[i] = mu0 / ws.t_[i];
-        return;
-      }
-      const double violation = std::max(-room, 0.0);
-      ws.lambda_[i] = std::min(mu0 / std::max(room + violation, 1.0), 0.5 * qp.softness_weight);
-      ws.lambda_soft_[i] = qp.softness_weight - ws.lambda_[i];
-      ws.sigma_[i] = violation + mu0 / ws.lambda_soft_[i];
-      ws.t_[i] = std::max(room + ws.sigma_[i], 1.0);
-    });
+    const double violation = std::max(-room, 0.0);
+    ws.lambda_[i] = std::min(mu0 / std::max(room + violation, 1.0), 0.5 * qp.softness_weight);
+    ws.lambda_soft_[i] = qp.softness_weight - ws.lambda_[i];
+    ws.sigma_[i] = violation + mu0 / ws.lambda_soft_[i];
+    ws.t_[i] = std::max(room + ws.sigma_[i], 1.0);
   }
 
   // The last solution's multipliers and slacks, each pushed at least
   // warm_start_floor off its bound: a point that close to the boundary
   // would block the first steps.
-  void warm_rows() {
+  void warm_row(const QpRow& row, int i, double room) {
     const double floor = settings.warm_start_floor;
-    for_each_row([&](int k, const QpRow& row, int i) {
-      const double room = row.d - row_dot(row, i, ws.w_[k]);
-      if (!row.soft) {
-        ws.t_[i] = std::max(room, floor);
-        ws.lambda_[i] = std::max(ws.lambda_[i], floor);
-        return;
-      }
-      ws.lambda_[i] = std::clamp(ws.lambda_[i], floor, qp.softness_weight - floor);
-      ws.lambda_soft_[i] = qp.softness_weight - ws.lambda_[i];
-      ws.sigma_[i] = std::max(-room, 0.0) + floor * floor / ws.lambda_soft_[i];
-      ws.t_[i] = std::max(room + ws.sigma_[i], floor);
-    });
+    if (!row.soft) {
+      ws.t_[i] = std::max(room, floor);
+      ws.lambda_[i] = std::max(ws.lambda_[i], floor);
+      return;
+    }
+    ws.lambda_[i] = std::clamp(ws.lambda_[i], floor, qp.softness_weight - floor);
+    ws.lambda_soft_[i] = qp.softness_weight - ws.lambda_[i];
+    ws.sigma_[i] = std::max(-room, 0.0) + floor * floor / ws.lambda_soft_[i];
+    ws.t_[i] = std::max(room + ws.sigma_[i], floor);
   }
 
   // g' v for row i, cheap for the bound rows that have one nonzero.
@@ -638,6 +685,7 @@ struct InteriorPointMethod {
       if (!ws.w_[k].allFinite()) result.status = QpStatus::NumericalError;
     }
     ws.has_solution_ = result.status == QpStatus::Optimal;
+    ws.stages_since_solution_ = 0;
     return result;
   }
 };

@@ -71,8 +71,12 @@ MiqpSession::MiqpSession(const expert::ExpertPlanner& expert, const Config& conf
                     const expert::PlanHints& hints) { return expert.plan(scene, limits, hints); },
           config) {}
 
-MiqpSession::MiqpSession(PlanFunction plan, const Config& config)
-    : plan_function_(std::move(plan)), config_(config), keeper_(config) {}
+MiqpSession::MiqpSession(PlanFunction plan, const Config& config,
+                         std::unique_ptr<expert::LaneChangeWorkspace> workspace)
+    : plan_function_(std::move(plan)),
+      config_(config),
+      keeper_(config),
+      workspace_(std::move(workspace)) {}
 
 Decision MiqpSession::act(const Observation& o) {
   const bool due = !plan_ || o.step - plan_step_ >= config_.closed_loop.replan_period;
@@ -101,6 +105,11 @@ std::string MiqpSession::replan(const Observation& o) {
     guess = shifted(*plan_, o.step - plan_step_, scene.steps, dt);
     modes = shifted(modes_, o.step - plan_step_, scene.steps);
     hints = {&guess, &modes, true};
+  }
+  if (workspace_) {
+    workspace_->advance(o.step - workspace_step_);
+    workspace_step_ = o.step;
+    hints.workspace = workspace_.get();
   }
   const ExpertResult result =
       plan_function_(scene, {config_.closed_loop.step_budget_ms / 1000.0}, hints);

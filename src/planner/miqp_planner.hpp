@@ -2,6 +2,7 @@
 // The planners' internals, shared by the planners of src/planner/ (and the
 // hierarchical planner's take-over, which is this session).
 #include <functional>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -26,7 +27,11 @@ using PlanFunction = std::function<expert::ExpertResult(const Scenario&, const e
 class MiqpSession final : public PlannerSession {
  public:
   MiqpSession(const expert::ExpertPlanner& expert, const Config& config);
-  MiqpSession(PlanFunction plan, const Config& config);
+  /// With a workspace, every re-plan solves in it (PlanHints::workspace),
+  /// advanced by the steps since the last: the next plan's QPs warm-start
+  /// from this one's.
+  MiqpSession(PlanFunction plan, const Config& config,
+              std::unique_ptr<expert::LaneChangeWorkspace> workspace = nullptr);
   [[nodiscard]] Decision act(const Observation& observation) override;
   /// Time of the last re-plan (ms), for benchmarks.
   [[nodiscard]] double last_plan_ms() const { return last_plan_ms_; }
@@ -44,6 +49,8 @@ class MiqpSession final : public PlannerSession {
   std::optional<expert::Iterate> plan_;
   std::vector<int> modes_;
   int plan_step_ = 0;
+  std::unique_ptr<expert::LaneChangeWorkspace> workspace_;
+  int workspace_step_ = 0;  ///< the step of the last re-plan that used workspace_
   double last_plan_ms_ = 0.0;
   expert::PlanStatus last_status_ = expert::PlanStatus::Converged;
 };

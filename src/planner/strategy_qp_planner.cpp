@@ -84,7 +84,7 @@ CandidateOutcome StrategyQpPlanner::solve_candidate(const Scenario& scene,
                                                     const expert::PlanHints& hints,
                                                     expert::ExpertResult& result) const {
   const auto start = Clock::now();
-  result = fixed_.plan(scene, limits, {hints.path, &modes});
+  result = fixed_.plan(scene, limits, {hints.path, &modes, hints.path_is_plan, hints.workspace});
   CandidateOutcome out;
   out.rounds = result.iterations();
   out.status = result.status;
@@ -217,8 +217,8 @@ void StrategyQpPlanner::follow_screened(const Scenario& scene, const expert::Pla
   const bool last_plan_first = !list.empty() && list.front().strategy.empty() &&
                                list.front().starts_from_plan(hints) && hints.path != nullptr;
   if (last_plan_first) {
-    CandidateOutcome o =
-        solve_candidate(scene, list.front().modes, limits, {hints.path, nullptr, true}, plan);
+    CandidateOutcome o = solve_candidate(scene, list.front().modes, limits,
+                                         {hints.path, nullptr, true, hints.workspace}, plan);
     if (take_candidate(o, list.front().modes, plan, out, rescued_hint)) {
       out.chosen = 0;
       held = 1;
@@ -397,7 +397,7 @@ std::unique_ptr<PlannerSession> StrategyQpPlanner::start(const Scenario& /*scene
   return std::make_unique<MiqpSession>(
       [this](const Scenario& scene, const expert::PlanLimits& limits,
              const expert::PlanHints& hints) { return plan(scene, limits, hints).result; },
-      config_);
+      config_, fixed_.solver().make_workspace());
 }
 
 }  // namespace lanechange::planner

@@ -370,6 +370,22 @@ TEST(Strategy, AGoodPredictionIsFollowedWithTheExactCost) {
   EXPECT_NEAR(learned.result.objective, exact.objective, 0.01 * exact.objective);
 }
 
+// Closed loop's steady state: re-planned from its own plan, with its own
+// modes (PlanHints::path_is_plan), the last plan's modes converge in their
+// first round, on that plan.
+TEST(Strategy, TheLastPlansModesConvergeOnItInOneRound) {
+  const Config config = testing::untimed_config();
+  const Scenario s = testing::open_road_scenario();
+  const auto [exact, truth] = exact_plan_of(s, config);
+  ASSERT_EQ(exact.status, PlanStatus::Converged);
+  const planner::StrategyQpPlanner p(config, model_of({s}, {truth}));
+  const planner::StrategyPlan again = p.plan(s, {}, {&exact.path, &exact.modes, true});
+  ASSERT_EQ(again.chosen, 0);
+  EXPECT_TRUE(again.candidates.front().strategy.empty());  // the last plan's modes
+  EXPECT_EQ(again.candidates.front().rounds, 1);
+  EXPECT_NEAR(again.result.objective, exact.objective, 1e-2 * exact.objective);
+}
+
 TEST(Strategy, NeighbourStrategiesShiftEachSwitchNode) {
   const auto near = planner::neighbour_strategies("0011122", 1);
   // (2, 5) shifted by at most one each, the unshifted one left out, and the

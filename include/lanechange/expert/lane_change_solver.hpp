@@ -30,6 +30,10 @@ struct LaneChangeSolution {
 class LaneChangeWorkspace {
  public:
   virtual ~LaneChangeWorkspace() = default;
+  /// The next problems start `nodes` nodes later than the last one solved
+  /// here: a re-planning session's step. A back-end that warm-starts from
+  /// its last solution lines it up with them.
+  virtual void advance(int /*nodes*/) {}
 };
 
 /// What a caller may pass to speed a solve up without changing its answer.

@@ -72,6 +72,11 @@ struct PlanHints {
   /// linearized about. A warm start's guess is no plan, and the first round
   /// from it never converges.
   bool path_is_plan = false;
+  /// Where the rounds solve, kept by the caller across plans (made by this
+  /// planner's solver().make_workspace()): a re-planning session's next
+  /// plan then warm-starts from this one's last QP, once the session has
+  /// advanced it by the steps in between. nullptr: a fresh one per plan.
+  LaneChangeWorkspace* workspace = nullptr;
 };
 
 /// The initial guess (config.expert.warm_start) for a scenario.

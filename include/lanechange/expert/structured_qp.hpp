@@ -133,10 +133,17 @@ class QpWorkspace {
   [[nodiscard]] const std::vector<QpStageVector>& solution() const { return w_; }
   /// A starting guess for the controls (rolled out through the dynamics).
   void set_initial_controls(const std::vector<Eigen::Vector2d>& controls);
+  /// The next problems start `stages` stages later than the last one solved
+  /// here (a re-plan some steps on): a warm start (QpSettings::warm_start)
+  /// takes each stage's multipliers from the stage of the last solution
+  /// that now lies there.
+  void advance(int stages);
 
  private:
   friend struct InteriorPointMethod;
   void mark_control_boxes(const StructuredQp& qp);
+  /// Lines the last solution's rows up with `qp`'s stages (see advance).
+  void carry_solution(const StructuredQp& qp);
   std::vector<int> row_offset_;
   std::vector<int> single_index_;  ///< per row: its only nonzero, or -1
   std::vector<bool> control_box_;  ///< per row: a hard bound on one control
@@ -151,7 +158,10 @@ class QpWorkspace {
   std::vector<Eigen::Matrix<double, kQpControls, kQpStates>> sbar_;
   std::vector<Eigen::Matrix<double, kQpStates, 1>> costate_;
   std::vector<double> t_, lambda_, sigma_, lambda_soft_;
-  bool has_solution_ = false;  ///< t_ .. lambda_soft_ hold an optimal solution of these rows
+  bool has_solution_ = false;         ///< t_ .. lambda_soft_ hold an optimal solution of these rows
+  std::vector<char> warm_stage_;      ///< per stage: its rows hold that solution's values
+  std::vector<int> next_row_offset_;  ///< carry_solution's scratch
+  int stages_since_solution_ = 0;     ///< advance()'s stages since that solution
   std::vector<double> dt_, dlambda_, dsigma_, dlambda_soft_;
   std::vector<double> weight_, offset_, soft_q_;
   std::vector<double> dt_aff_, dlambda_aff_, dsigma_aff_, dlambda_soft_aff_;
