@@ -1,13 +1,15 @@
 // Closed-loop step times of our planners: one act() of a planner session,
 // measured inside whole rollouts of sampled scenes (the re-plan is
 // warm-started from the last plan, so a step is only meaningful in its
-// rollout); closed_loop_steps.hpp has the counters and the environment.
+// rollout); closed_loop_steps.hpp has the counters and the environment,
+// LANECHANGE_BENCH_CONFIG below a config file.
 #include <benchmark/benchmark.h>
 
 #include <cstdlib>
 #include <string>
 
 #include "closed_loop_steps.hpp"
+#include "lanechange/config.hpp"
 #include "lanechange/planner/planner.hpp"
 
 namespace {
@@ -15,7 +17,10 @@ namespace {
 void run_planner(
     benchmark::State& state, const char* name, const std::string& model = "",
     double lookahead_tolerance = lanechange::Config{}.closed_loop.lookahead_tolerance) {
-  lanechange::Config config;
+  // LANECHANGE_BENCH_CONFIG: a config file (lanechange --config) instead of the defaults.
+  const char* path = std::getenv("LANECHANGE_BENCH_CONFIG");
+  lanechange::Config config =
+      path != nullptr ? lanechange::load_config(path) : lanechange::Config{};
   config.closed_loop.step_budget_ms = 1e6;  // time every step, overrule none
   config.closed_loop.lookahead_tolerance = lookahead_tolerance;
   lanechange::bench::run_closed_loop_steps(

@@ -129,6 +129,8 @@ void Config::validate() const {
   require(strategy_qp.screen_tolerance > 0.0 && strategy_qp.screen_tolerance < 1.0,
           "strategy_qp.screen_tolerance", "must lie in (0, 1)");
   require(strategy_qp.vote_pool >= 1, "strategy_qp.vote_pool", "must be at least 1");
+  require(strategy_qp.replan_candidates >= 1, "strategy_qp.replan_candidates",
+          "must be at least 1");
   require(strategy_qp.screen_keep >= 1, "strategy_qp.screen_keep", "must be at least 1");
 }
 

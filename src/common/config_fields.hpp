@@ -197,6 +197,7 @@ template <class V, class S>
 void visit_fields(V& v, S& s) requires std::same_as<std::remove_const_t<S>, StrategyQpSettings> {
   v("candidates", s.candidates);
   v("vote_pool", s.vote_pool);
+  v("replan_candidates", s.replan_candidates);
   v("screen", s.screen);
   v("screen_keep", s.screen_keep);
   v("rough_screen", s.rough_screen);

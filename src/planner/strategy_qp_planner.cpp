@@ -140,10 +140,11 @@ std::vector<StrategyQpPlanner::Candidate> StrategyQpPlanner::candidates_of(
     list.push_back({{}, *hints.modes, {}, {}});
     time_warm_starts(scene, hints, list);
   }
-  const int wanted = config_.strategy_qp.candidates;
   // With the last plan's modes to go on, the votes are alternatives to them
   // and the plain top k serve; without (open loop, a rollout's first step),
   // every slot a refused vote takes is a step closer to the exact search.
+  const int wanted =
+      list.empty() ? config_.strategy_qp.candidates : config_.strategy_qp.replan_candidates;
   const int pool = list.empty() ? std::max(wanted, config_.strategy_qp.vote_pool) : wanted;
   std::vector<Candidate> votes;
   for (learn::Strategy& s : model_->predict(scene, pool)) {

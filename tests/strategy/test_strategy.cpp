@@ -386,6 +386,24 @@ TEST(Strategy, TheLastPlansModesConvergeOnItInOneRound) {
   EXPECT_NEAR(again.result.objective, exact.objective, 1e-2 * exact.objective);
 }
 
+// A re-plan screens strategy_qp.replan_candidates votes beside the last
+// plan's modes; a plan without them, strategy_qp.candidates.
+TEST(Strategy, AReplanScreensItsOwnNumberOfVotes) {
+  Config config = testing::untimed_config();
+  config.strategy_qp.candidates = 3;
+  config.strategy_qp.vote_pool = 3;  // no reachability check: every vote takes a place
+  config.strategy_qp.replan_candidates = 1;
+  const Scenario s = testing::open_road_scenario();
+  const auto [exact, truth] = exact_plan_of(s, config);
+  ASSERT_EQ(exact.status, PlanStatus::Converged);
+  const planner::StrategyQpPlanner p(config, model_of({s, s, s}, {"2", "12", "112"}));
+  EXPECT_EQ(p.plan(s).candidates.size(), 3U);
+  const planner::StrategyPlan again = p.plan(s, {}, {&exact.path, &exact.modes, true});
+  EXPECT_EQ(again.candidates.size(), 2U);  // the last plan's modes and one vote
+  config.strategy_qp.replan_candidates = 0;
+  expect_refused(config, "strategy_qp.replan_candidates");
+}
+
 TEST(Strategy, NeighbourStrategiesShiftEachSwitchNode) {
   const auto near = planner::neighbour_strategies("0011122", 1);
   // (2, 5) shifted by at most one each, the unshifted one left out, and the
