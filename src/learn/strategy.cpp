@@ -106,6 +106,28 @@ namespace {
 constexpr double kGapLookahead = 10.0;
 constexpr double kGapTimeStep = 0.1;
 
+// The `k` smallest of `d2` as (value, index), nearest first, ties by index:
+// one pass with a bounded max-heap, where sorting an index of every row took
+// about as long again as the distances themselves.
+std::vector<std::pair<double, int>> nearest_rows(const Eigen::VectorXd& d2, int k) {
+  const auto wanted = static_cast<std::size_t>(std::min<Eigen::Index>(k, d2.size()));
+  std::vector<std::pair<double, int>> heap;  // the farthest kept on top
+  heap.reserve(wanted + 1);
+  for (Eigen::Index i = 0; i < d2.size(); ++i) {
+    const std::pair<double, int> row{d2(i), static_cast<int>(i)};
+    if (heap.size() < wanted) {
+      heap.push_back(row);
+      std::push_heap(heap.begin(), heap.end());
+    } else if (wanted > 0 && row < heap.front()) {
+      std::pop_heap(heap.begin(), heap.end());
+      heap.back() = row;
+      std::push_heap(heap.begin(), heap.end());
+    }
+  }
+  std::sort_heap(heap.begin(), heap.end());
+  return heap;
+}
+
 }  // namespace
 
 double gap_open_time(const Scenario& s, double traffic_speed_cap) {
@@ -212,18 +234,12 @@ std::vector<Strategy> StrategyModel::predict(const Eigen::VectorXd& features, in
   // rows instead of a temporary as large as the table.
   const Eigen::VectorXd d2 =
       ((norms_ - 2.0 * (points_.transpose() * q)).array() + q.squaredNorm()).max(0.0).matrix();
-  std::vector<int> order(static_cast<std::size_t>(d2.size()));
-  for (std::size_t i = 0; i < order.size(); ++i) order[i] = static_cast<int>(i);
-  const auto k = std::min<std::size_t>(static_cast<std::size_t>(neighbors_), order.size());
-  const auto nearer = [&d2](int a, int b) { return d2(a) < d2(b); };
-  const auto kth = order.begin() + static_cast<std::ptrdiff_t>(k);
-  std::nth_element(order.begin(), kth, order.end(), nearer);
-  std::sort(order.begin(), kth, nearer);
+  const std::vector<std::pair<double, int>> nearest = nearest_rows(d2, neighbors_);
   // Inverse-distance votes: a scene seen before (distance 0) decides alone.
   std::vector<std::pair<double, int>> votes;  // (weight, strategy)
-  for (std::size_t i = 0; i < k; ++i) {
-    const int s = label_[static_cast<std::size_t>(order[i])];
-    const double w = 1.0 / (std::sqrt(d2(order[i])) + 1e-9);
+  for (const auto& [squared_distance, row] : nearest) {
+    const int s = label_[static_cast<std::size_t>(row)];
+    const double w = 1.0 / (std::sqrt(squared_distance) + 1e-9);
     auto it =
         std::find_if(votes.begin(), votes.end(), [s](const auto& v) { return v.second == s; });
     if (it == votes.end()) {

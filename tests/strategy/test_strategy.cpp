@@ -2,6 +2,7 @@
 // the planner in closed loop, with strategy models fitted on expert plans.
 #include <gtest/gtest.h>
 
+#include <Eigen/Core>
 #include <cmath>
 #include <limits>
 #include <memory>
@@ -267,6 +268,25 @@ TEST(Strategy, TheVoteRanksTheNearestScenesStrategiesFirst) {
   nlohmann::json damaged = model->to_json();
   damaged["strategies"][0] = "03";
   EXPECT_THROW((void)learn::StrategyModel::from_json(damaged), InputError);
+}
+
+// The vote's neighbours are the k nearest rows, nearest first: rows along one
+// feature at 0, 1, ..., 39 (the others equal), a query at 10.2, k = 5.
+TEST(Strategy, TheVoteTakesTheKNearestRowsInTheirOrder) {
+  learn::StrategyRows rows;
+  const int width = static_cast<int>(learn::strategy_feature_names().size());
+  for (int i = 0; i < 40; ++i) {
+    Eigen::VectorXd f = Eigen::VectorXd::Zero(width);
+    f(2) = i;
+    rows.features.push_back(f);
+    rows.labels.push_back(std::string(static_cast<std::size_t>(i / 3 + 1), "012"[i % 3]));
+  }
+  const auto model = learn::StrategyModel::fit(rows, {5, 0});
+  Eigen::VectorXd q = Eigen::VectorXd::Zero(width);
+  q(2) = 10.2;
+  const std::vector<learn::Strategy> expected{rows.labels[10], rows.labels[11], rows.labels[9],
+                                              rows.labels[12], rows.labels[8]};
+  EXPECT_EQ(model.predict(q, 10), expected);
 }
 
 TEST(Strategy, AnInfeasiblePredictionFallsBackToTheExactAnswer) {
