@@ -106,23 +106,25 @@ namespace {
 constexpr double kGapLookahead = 10.0;
 constexpr double kGapTimeStep = 0.1;
 
-// The `k` smallest of `d2` as (value, index), nearest first, ties by index:
-// one pass with a bounded max-heap, where sorting an index of every row took
-// about as long again as the distances themselves.
-std::vector<std::pair<double, int>> nearest_rows(const Eigen::VectorXd& d2, int k) {
+// The `k` smallest of `d2` as (value, index), nearest first, ties to the
+// earlier row: one pass with a bounded max-heap, where sorting an index of
+// every row took about as long again as the distances themselves.
+std::vector<std::pair<double, int>> nearest_rows(const Eigen::VectorXf& d2, int k) {
   const auto wanted = static_cast<std::size_t>(std::min<Eigen::Index>(k, d2.size()));
   std::vector<std::pair<double, int>> heap;  // the farthest kept on top
+  if (wanted == 0) return heap;
   heap.reserve(wanted + 1);
-  for (Eigen::Index i = 0; i < d2.size(); ++i) {
-    const std::pair<double, int> row{d2(i), static_cast<int>(i)};
-    if (heap.size() < wanted) {
-      heap.push_back(row);
-      std::push_heap(heap.begin(), heap.end());
-    } else if (wanted > 0 && row < heap.front()) {
-      std::pop_heap(heap.begin(), heap.end());
-      heap.back() = row;
-      std::push_heap(heap.begin(), heap.end());
-    }
+  Eigen::Index i = 0;
+  for (; i < d2.size() && heap.size() < wanted; ++i) {
+    heap.emplace_back(d2(i), static_cast<int>(i));
+    std::push_heap(heap.begin(), heap.end());
+  }
+  for (; i < d2.size(); ++i) {
+    // Most rows are farther than the k-th so far: one comparison each.
+    if (d2(i) >= heap.front().first) continue;
+    std::pop_heap(heap.begin(), heap.end());
+    heap.back() = {d2(i), static_cast<int>(i)};
+    std::push_heap(heap.begin(), heap.end());
   }
   std::sort_heap(heap.begin(), heap.end());
   return heap;
@@ -211,7 +213,7 @@ StrategyModel StrategyModel::fit(const StrategyRows& rows, const StrategySetting
   }
   m.standardizer_ = Standardizer::fit(x);
   m.points_ = m.standardizer_.apply(x).transpose();
-  m.norms_ = m.points_.colwise().squaredNorm().transpose();
+  m.table_ = m.points_.transpose().cast<float>();
   std::map<Strategy, int> index;
   for (const Strategy& s : labels) {
     const auto [it, fresh] = index.emplace(s, static_cast<int>(m.strategies_.size()));
@@ -230,10 +232,15 @@ std::vector<Strategy> StrategyModel::predict(const Eigen::VectorXd& features, in
     throw InputError("", what);
   }
   const Eigen::VectorXd q = (features - standardizer_.mean).cwiseQuotient(standardizer_.scale);
-  // |p - q|^2 = |p|^2 - 2 p'q + |q|^2: one matrix-vector product over the
-  // rows instead of a temporary as large as the table.
-  const Eigen::VectorXd d2 =
-      ((norms_ - 2.0 * (points_.transpose() * q)).array() + q.squaredNorm()).max(0.0).matrix();
+  // Squared distances summed feature by feature, each a contiguous column:
+  // no cancellation, so a row the query repeats is at exactly 0 and decides
+  // alone (both are rounded to float alike). Float halves the bytes read,
+  // the bound on this loop.
+  const Eigen::VectorXf qf = q.cast<float>();
+  Eigen::VectorXf d2 = Eigen::VectorXf::Zero(table_.rows());
+  for (Eigen::Index j = 0; j < table_.cols(); ++j) {
+    d2.array() += (table_.col(j).array() - qf(j)).square();
+  }
   const std::vector<std::pair<double, int>> nearest = nearest_rows(d2, neighbors_);
   // Inverse-distance votes: a scene seen before (distance 0) decides alone.
   std::vector<std::pair<double, int>> votes;  // (weight, strategy)
@@ -312,7 +319,7 @@ StrategyModel StrategyModel::from_json(const json& j) {
     }
   }
   m.points_ = Eigen::Map<const Eigen::MatrixXd>(points.data(), width, n);
-  m.norms_ = m.points_.colwise().squaredNorm().transpose();
+  m.table_ = m.points_.transpose().cast<float>();
   return m;
 }
 
