@@ -6,6 +6,7 @@
 #include <benchmark/benchmark.h>
 
 #include <cstdlib>
+#include <exception>
 #include <string>
 
 #include "closed_loop_steps.hpp"
@@ -19,8 +20,13 @@ void run_planner(
     double lookahead_tolerance = lanechange::Config{}.closed_loop.lookahead_tolerance) {
   // LANECHANGE_BENCH_CONFIG: a config file (lanechange --config) instead of the defaults.
   const char* path = std::getenv("LANECHANGE_BENCH_CONFIG");
-  lanechange::Config config =
-      path != nullptr ? lanechange::load_config(path) : lanechange::Config{};
+  lanechange::Config config;
+  try {
+    if (path != nullptr) config = lanechange::load_config(path);
+  } catch (const std::exception& e) {
+    state.SkipWithError(e.what());
+    return;
+  }
   config.closed_loop.step_budget_ms = 1e6;  // time every step, overrule none
   config.closed_loop.lookahead_tolerance = lookahead_tolerance;
   lanechange::bench::run_closed_loop_steps(
