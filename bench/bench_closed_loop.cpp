@@ -36,17 +36,24 @@ void run_planner(
 void BM_MiqpClosedLoopStep(benchmark::State& state) { run_planner(state, "miqp"); }
 void BM_KeepLaneStep(benchmark::State& state) { run_planner(state, "keep-lane"); }
 
-// mlp-miqp needs a trained model (lanechange train): LANECHANGE_BENCH_MODEL
-// names its directory. The step target (2 us median) counts the network's
-// steps, planned_step_ms_median; the second run rolls the look-ahead out
-// every step, for the ratio in the same run.
-void run_mlp_miqp(benchmark::State& state, double lookahead_tolerance) {
+// The learned planners need a trained model (lanechange train):
+// LANECHANGE_BENCH_MODEL names its directory; without it they are skipped.
+void run_learned(
+    benchmark::State& state, const char* name,
+    double lookahead_tolerance = lanechange::Config{}.closed_loop.lookahead_tolerance) {
   const char* model = std::getenv("LANECHANGE_BENCH_MODEL");
   if (model == nullptr) {
     state.SkipWithError("set LANECHANGE_BENCH_MODEL to a model directory (lanechange train)");
     return;
   }
-  run_planner(state, "mlp-miqp", model, lookahead_tolerance);
+  run_planner(state, name, model, lookahead_tolerance);
+}
+
+// mlp-miqp's step target (2 us median) counts the network's steps,
+// planned_step_ms_median; the second run rolls the look-ahead out every
+// step, for the ratio in the same run.
+void run_mlp_miqp(benchmark::State& state, double lookahead_tolerance) {
+  run_learned(state, "mlp-miqp", lookahead_tolerance);
 }
 void BM_MlpMiqpStep(benchmark::State& state) {
   run_mlp_miqp(state, lanechange::Config{}.closed_loop.lookahead_tolerance);
@@ -55,14 +62,7 @@ void BM_MlpMiqpStepRolledOutEveryStep(benchmark::State& state) { run_mlp_miqp(st
 
 // strategy-qp's re-plans (issue 14's 0.5 ms per plan): the same model
 // directory, its strategy part.
-void BM_StrategyQpStep(benchmark::State& state) {
-  const char* model = std::getenv("LANECHANGE_BENCH_MODEL");
-  if (model == nullptr) {
-    state.SkipWithError("set LANECHANGE_BENCH_MODEL to a model directory (lanechange train)");
-    return;
-  }
-  run_planner(state, "strategy-qp", model);
-}
+void BM_StrategyQpStep(benchmark::State& state) { run_learned(state, "strategy-qp"); }
 
 BENCHMARK(BM_MiqpClosedLoopStep)->Unit(benchmark::kMillisecond)->Iterations(1);
 BENCHMARK(BM_KeepLaneStep)->Unit(benchmark::kMillisecond)->Iterations(1);
