@@ -19,6 +19,7 @@ struct TrainArgs {
   double test_share = 0.2;
   int jobs = 0;
   int max_epochs = learn::NetworkSettings{}.max_epochs;
+  int network_width = learn::kHiddenWidth;
   bool plain_naive_bayes = false;
   bool quick = false;
   bool no_plots = false;
@@ -49,6 +50,7 @@ learn::TrainOptions train_options(const TrainArgs& a) {
   o.test_share = a.test_share;
   o.jobs = a.jobs;
   o.network.max_epochs = a.max_epochs;
+  o.network.hidden_width = a.network_width;
   o.search.naive_bayes_kernel = !a.plain_naive_bayes;
   o.search.quick = a.quick;
   o.plots = !a.no_plots;
@@ -121,6 +123,9 @@ void add_train(CLI::App& app, const ConfigSource& config) {
       ->check(CLI::Range(0, 1024));
   cmd->add_option("--max-epochs", args.max_epochs, "Upper bound on the network's epochs")
       ->check(CLI::Range(1, 100000));
+  cmd->add_option("--network-width", args.network_width,
+                  "Neurons in each of the network's 10 hidden layers (the paper's: 10)")
+      ->check(CLI::Range(1, learn::kMaxHiddenWidth));
   cmd->add_flag("--plain-naive-bayes", args.plain_naive_bayes,
                 "One normal per feature and class instead of kernel densities");
   cmd->add_flag("--quick", args.quick, "Smaller hyperparameter grids (tests, smoke runs)");

@@ -27,6 +27,34 @@ struct IsFc : std::false_type {};
 template <unsigned long N, dlib::fc_bias_mode B>
 struct IsFc<dlib::fc_<N, B>> : std::true_type {};
 
+// The hidden layers' width: their fc layers in the net's own order, the
+// output layer (visited first) left out.
+template <class Visit>
+void visit_hidden_fc(Net& net, Visit visit) {
+  bool output_layer = true;
+  dlib::visit_computational_layers(net, [&](auto& layer) {
+    if constexpr (IsFc<std::decay_t<decltype(layer)>>::value) {
+      if (!output_layer) visit(layer);
+      output_layer = false;
+    }
+  });
+}
+
+// Before the net's first forward pass, which allocates its parameters.
+void set_hidden_width(Net& net, int width) {
+  if (width < 1 || width > kMaxHiddenWidth) {
+    throw InputError("network width",
+                     std::to_string(width) + " is not in 1.." + std::to_string(kMaxHiddenWidth));
+  }
+  visit_hidden_fc(net, [&](auto& fc) { fc.set_num_outputs(width); });
+}
+
+int hidden_width_of(Net& net) {
+  long width = 0;
+  visit_hidden_fc(net, [&](auto& fc) { width = static_cast<long>(fc.get_num_outputs()); });
+  return static_cast<int>(width);
+}
+
 dlib::matrix<float> row_of(const Eigen::MatrixXd& x, Eigen::Index r) {
   dlib::matrix<float> m(static_cast<long>(x.cols()), 1);
   for (Eigen::Index c = 0; c < x.cols(); ++c) m(static_cast<long>(c)) = static_cast<float>(x(r, c));
@@ -116,6 +144,7 @@ TrainedNetwork train_network(const Eigen::MatrixXd& x, const Eigen::MatrixXd& y,
   TrainedNetwork result;
   Net net;
   if (warm_start.empty()) {
+    set_hidden_width(net, s.hidden_width);
     // dlib draws its initial weights from std::rand when a layer is set up;
     // seeding it and setting up here (one forward pass) makes runs repeatable.
     std::srand(static_cast<unsigned>(s.seed));
@@ -125,6 +154,10 @@ TrainedNetwork train_network(const Eigen::MatrixXd& x, const Eigen::MatrixXd& y,
       dlib::deserialize(warm_start) >> net;
     } catch (const dlib::serialization_error& e) {
       throw InputError(warm_start, std::string("not a network of this model's shape: ") + e.what());
+    }
+    if (const int width = hidden_width_of(net); width != s.hidden_width) {
+      throw InputError(warm_start, "a network " + std::to_string(width) + " wide, not " +
+                                       std::to_string(s.hidden_width));
     }
   }
   dlib::dnn_trainer<Net, dlib::adam> trainer(net, dlib::adam(0.0, 0.9, 0.999));

@@ -406,7 +406,7 @@ json TrainOptions::config() const {
           {"quick_search", search.quick},
           {"network",
            {{"hidden_layers", kHiddenLayers},
-            {"hidden_width", kHiddenWidth},
+            {"hidden_width", network.hidden_width},
             {"activation", "tanh"},
             {"optimizer", "adam"},
             {"max_epochs", network.max_epochs},
@@ -491,6 +491,8 @@ TrainReport retrain_network(const RetrainOptions& options) {
   TrainOptions train;
   train.seed = base.at("config").at("seed").get<std::uint64_t>();
   train.network = options.network;
+  // A retrain keeps the base's shape (and a fine-tune needs it).
+  train.network.hidden_width = base.at("config").at("network").value("hidden_width", kHiddenWidth);
   train.plots = options.plots;
   train.progress = options.progress;
   // Named, not a structured binding: the lambda below captures it.

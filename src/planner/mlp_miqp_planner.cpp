@@ -188,6 +188,16 @@ std::string network_hit(Car car, double in_seconds) {
          std::to_string(in_seconds) + " s";
 }
 
+// The shortfall is in the reason: the expert's own plans touch these
+// distances, so how far the network misses them says how near it came.
+std::string short_of_safe_distance(Car car, double shortfall) {
+  char what[128];
+  std::snprintf(what, sizeof what,
+                "the network would enter the target lane %.2f m short of the %s's safe distance",
+                shortfall, std::string(to_string(car)).c_str());
+  return what;
+}
+
 // The expert's own rule (Eq. 1): once the ego's body touches the target
 // lane it keeps the safe distance ahead of the follower and behind the
 // target. A network that breaks it is about to cut in where the expert never
@@ -201,13 +211,13 @@ std::string too_close_in_target_lane(const Observation& o, const Scenario& scene
   const CarState& target = o.car(Car::Target);
   // The gap is the one between the follower and the target: behind the
   // follower (when it is ahead) is not where the expert changes lanes.
-  if (o.ego.x < follower.x + d.follower.standstill + d.follower.time_headway * follower.v) {
-    return "the network would enter the target lane short of the follower's safe distance";
-  }
+  const double behind_follower =
+      follower.x + d.follower.standstill + d.follower.time_headway * follower.v - o.ego.x;
+  if (behind_follower > 0.0) return short_of_safe_distance(Car::Follower, behind_follower);
   // Likewise ahead of the target (when it is behind, passing the ego).
-  if (o.ego.x + d.target.time_headway * o.ego.v > target.x - d.target.standstill) {
-    return "the network would enter the target lane short of the target's safe distance";
-  }
+  const double past_target =
+      o.ego.x + d.target.time_headway * o.ego.v - (target.x - d.target.standstill);
+  if (past_target > 0.0) return short_of_safe_distance(Car::Target, past_target);
   return "";
 }
 

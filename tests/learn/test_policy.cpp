@@ -37,10 +37,16 @@ NetworkSettings few_epochs() {
   return s;
 }
 
-TEST(ActionNetwork, ExportedPolicyMatchesDlibTo1e5OnRandomInputs) {
+// The paper's width and a wider one: the run-time policy sizes itself from
+// the exported layers.
+class ExportedPolicy : public ::testing::TestWithParam<int> {};
+
+TEST_P(ExportedPolicy, MatchesDlibTo1e5OnRandomInputs) {
   const int inputs = 28;
   const Toy t = toy(inputs, 1);
-  const TrainedNetwork net = train_network(t.x, t.y, t.train, t.validation, few_epochs());
+  NetworkSettings settings = few_epochs();
+  settings.hidden_width = GetParam();
+  const TrainedNetwork net = train_network(t.x, t.y, t.train, t.validation, settings);
   ASSERT_FALSE(net.curve.empty());
   // Normalisation that is not the identity, to test it is applied.
   PolicyWeights w;
@@ -52,6 +58,7 @@ TEST(ActionNetwork, ExportedPolicyMatchesDlibTo1e5OnRandomInputs) {
   w.output_scale = Eigen::Vector2d(2.0, 0.25);
   net.export_layers(w.weights, w.biases);
   const Policy policy(PolicyWeights::from_json(nlohmann::json::parse(w.to_json().dump())));
+  EXPECT_EQ(policy.width(), GetParam());
 
   std::mt19937_64 rng(9);
   std::uniform_real_distribution<double> u(-10.0, 10.0);
@@ -66,6 +73,24 @@ TEST(ActionNetwork, ExportedPolicyMatchesDlibTo1e5OnRandomInputs) {
     const Eigen::Vector2d got = policy.act(raw.row(r).transpose());
     EXPECT_NEAR(got(0), want(0), 1e-5);
     EXPECT_NEAR(got(1), want(1), 1e-5);
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(Widths, ExportedPolicy, ::testing::Values(kHiddenWidth, 24));
+
+TEST(ActionNetwork, AWarmStartOfAnotherWidthOrAnImpossibleWidthIsRefused) {
+  const Toy t = toy(6, 6);
+  NetworkSettings s = few_epochs();
+  s.max_epochs = 1;
+  s.hidden_width = 12;
+  const std::string file = ::testing::TempDir() + "/width12.dlib";
+  train_network(t.x, t.y, t.train, t.validation, s).save(file);
+  EXPECT_NO_THROW((void)train_network(t.x, t.y, t.train, t.validation, s, nullptr, file));
+  s.hidden_width = kHiddenWidth;
+  EXPECT_THROW((void)train_network(t.x, t.y, t.train, t.validation, s, nullptr, file), InputError);
+  for (const int width : {0, kMaxHiddenWidth + 1}) {
+    s.hidden_width = width;
+    EXPECT_THROW((void)train_network(t.x, t.y, t.train, t.validation, s), InputError) << width;
   }
 }
 
@@ -106,6 +131,12 @@ TEST(Policy, RefusesWeightsOfAnotherShapeAndObservationsOfAnotherSize) {
   net.export_layers(w.weights, w.biases);
   const Policy policy(w);
   EXPECT_THROW((void)policy.act(Eigen::VectorXd::Zero(5)), InputError);
+  PolicyWeights too_wide = w;
+  too_wide.weights[0] = Eigen::MatrixXf::Zero(kMaxHiddenWidth + 1, 4);
+  EXPECT_THROW(Policy{too_wide}, InputError);
+  PolicyWeights uneven = w;
+  uneven.weights[3] = Eigen::MatrixXf::Zero(kHiddenWidth + 1, kHiddenWidth);
+  EXPECT_THROW(Policy{uneven}, InputError);
   w.weights.pop_back();
   EXPECT_THROW(Policy{w}, InputError);
 }

@@ -245,5 +245,31 @@ TEST_F(Trained, CliTrainsRepeatablyWithPicturesAndBadInputLeavesTheModelAlone) {
   EXPECT_EQ(testing::read_text((foreign / "keep.txt").string()), "mine");
 }
 
+// A network wider than the paper's: trained from the command line, loaded
+// at its width, kept by a retrain; an impossible width is an input error.
+TEST_F(Trained, AWiderNetworkIsTrainedLoadedAndKeptByARetrain) {
+  const std::string out = (root_ / "wide_model").string();
+  const auto run = testing::run_cli(train_args(out) + " --network-width 16");
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  EXPECT_EQ(Model::load(out).policy().width(), 16);
+  const json config = json::parse(testing::read_text(out + "/model.json"))["config"];
+  EXPECT_EQ(config["network"]["hidden_width"], 16);
+
+  RetrainOptions o;
+  o.base_model = out;
+  o.data_dirs = {data_dir()};
+  o.out_dir = (root_ / "wide_retrained").string();
+  o.network.max_epochs = 2;
+  o.plots = false;
+  (void)retrain_network(o);
+  EXPECT_EQ(Model::load(o.out_dir).policy().width(), 16);
+
+  const auto before = snapshot(out);
+  const auto bad = testing::run_cli(train_args(out) + " --network-width 65");
+  EXPECT_EQ(bad.exit_code, 2) << bad.output;
+  EXPECT_NE(bad.output.find("--network-width"), std::string::npos) << bad.output;
+  EXPECT_EQ(snapshot(out), before);
+}
+
 }  // namespace
 }  // namespace lanechange::learn

@@ -1,9 +1,9 @@
 #pragma once
-// Training the action network (10 hidden layers of 10 tanh, Adam, MSE) with
-// dlib. Inputs and outputs are normalised by the caller's statistics;
-// training stops early when the validation loss has not improved for
-// `patience` epochs, and the best epoch's weights are kept. dlib stays behind
-// this header: the run-time policy (policy.hpp) does not need it.
+// Training the action network (10 hidden layers of tanh, 10 wide as the
+// paper's unless `hidden_width` says otherwise; Adam, MSE) with dlib. Inputs and outputs are
+// normalised by the caller's statistics; training stops early when the validation loss has not
+// improved for `patience` epochs, and the best epoch's weights are kept. dlib stays behind this
+// header: the run-time policy (policy.hpp) does not need it.
 #include <Eigen/Dense>
 #include <cstdint>
 #include <memory>
@@ -16,6 +16,7 @@
 namespace lanechange::learn {
 
 struct NetworkSettings {
+  int hidden_width = kHiddenWidth;  ///< neurons per hidden layer, 1..kMaxHiddenWidth
   int max_epochs = 300;
   int patience = 20;  ///< epochs without a better validation loss before stopping
   int batch_size = 256;

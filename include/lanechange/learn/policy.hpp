@@ -1,7 +1,8 @@
 #pragma once
-// The action network at run time: the exported weights of the 10x10 tanh
-// network, evaluated with fixed-size Eigen (no training library, no heap
-// after construction). Raw observation in, physical [a, omega] out.
+// The action network at run time: the exported weights of the tanh network
+// (10 hidden layers; 10 wide as the paper's, or wider), evaluated with Eigen
+// (no training library, no heap after construction). Raw observation in,
+// physical [a, omega] out.
 #include <Eigen/Dense>
 #include <array>
 #include <nlohmann/json.hpp>
@@ -11,7 +12,10 @@
 namespace lanechange::learn {
 
 inline constexpr int kHiddenLayers = 10;
+/// The paper's width, the default.
 inline constexpr int kHiddenWidth = 10;
+/// The widest hidden layer a policy may have (its activations live on the stack).
+inline constexpr int kMaxHiddenWidth = 64;
 inline constexpr int kActions = 2;
 /// The most inputs a policy takes (the data set lists 28 today).
 inline constexpr int kMaxPolicyInputs = 40;
@@ -26,7 +30,8 @@ struct PolicyWeights {
   std::vector<Eigen::MatrixXf> weights;
   std::vector<Eigen::VectorXf> biases;
   [[nodiscard]] nlohmann::json to_json() const;
-  /// InputError if the layer shapes are not those of the 10x10 network.
+  /// InputError if the layer shapes are not those of a 10-layer network
+  /// (Policy's constructor checks them).
   static PolicyWeights from_json(const nlohmann::json& j);
 };
 
@@ -38,14 +43,14 @@ class Policy {
   /// [a, omega] in SI units for one raw observation (the `inputs` columns).
   [[nodiscard]] Eigen::Vector2d act(const Observation& observation) const;
   [[nodiscard]] int inputs() const { return static_cast<int>(in_mean_.size()); }
+  /// Neurons per hidden layer.
+  [[nodiscard]] int width() const { return static_cast<int>(weights_.back().cols()); }
 
  private:
-  using Hidden = Eigen::Matrix<float, kHiddenWidth, 1>;
-  Eigen::Matrix<float, kHiddenWidth, Eigen::Dynamic, 0, kHiddenWidth, kMaxPolicyInputs> first_;
-  std::array<Eigen::Matrix<float, kHiddenWidth, kHiddenWidth>, kHiddenLayers - 1> hidden_;
-  std::array<Hidden, kHiddenLayers> bias_;
-  Eigen::Matrix<float, kActions, kHiddenWidth> last_;
-  Eigen::Matrix<float, kActions, 1> last_bias_;
+  using Hidden = Eigen::Matrix<float, Eigen::Dynamic, 1, 0, kMaxHiddenWidth, 1>;
+  /// Input layer, the kHiddenLayers - 1 hidden-to-hidden layers, output layer.
+  std::array<Eigen::MatrixXf, kHiddenLayers + 1> weights_;
+  std::array<Eigen::VectorXf, kHiddenLayers + 1> biases_;
   Observation in_mean_, in_inverse_scale_;
   Eigen::Vector2d out_mean_, out_scale_;
 };
