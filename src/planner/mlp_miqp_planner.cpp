@@ -102,16 +102,35 @@ learn::Observation PolicyInputs::read(const Observation& o) const {
 }
 
 MlpMiqpPlanner::MlpMiqpPlanner(Config config, SceneClassifier classify, Network network,
-                               std::shared_ptr<const expert::LaneChangeSolver> solver)
+                               std::shared_ptr<const expert::LaneChangeSolver> solver,
+                               std::string name)
     : config_(closed_loop_expert(std::move(config))),
       classify_(std::move(classify)),
       network_(std::move(network)),
-      expert_(config_, std::move(solver)) {}
+      expert_(config_, std::move(solver)),
+      name_(std::move(name)) {}
 
 MlpMiqpPlanner::MlpMiqpPlanner(Config config, const std::shared_ptr<const learn::Model>& model,
                                std::shared_ptr<const expert::LaneChangeSolver> solver)
     : MlpMiqpPlanner(std::move(config), scene_classifier(model), network_of(model),
                      std::move(solver)) {}
+
+std::shared_ptr<const MlpMiqpPlanner> make_oracle_mlp_miqp(
+    const Config& config, const std::shared_ptr<const learn::Model>& model) {
+  auto solver = std::make_shared<expert::FastLaneChangeSolver>();
+  auto oracle = std::make_shared<const expert::ExpertPlanner>(closed_loop_expert(config), solver);
+  auto keeper = std::make_shared<const LaneKeeper>(oracle->config());
+  MlpMiqpPlanner::Network network = [oracle, keeper](const Observation& o) {
+    const expert::ExpertResult plan = oracle->plan(scene_now(o, oracle->config()));
+    if (plan.status != expert::PlanStatus::Converged || plan.path.controls.empty()) {
+      return fallback_control(*keeper, o);
+    }
+    const auto& u = plan.path.controls.front();
+    return EgoControl{u(0), u(1)};
+  };
+  return std::make_shared<MlpMiqpPlanner>(config, scene_classifier(model), std::move(network),
+                                          std::move(solver), "mlp-miqp-oracle");
+}
 
 bool MlpMiqpPlanner::tries(const Scenario& scene) const {
   return classify_(scene) != static_cast<int>(Label::Failure);

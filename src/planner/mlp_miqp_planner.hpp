@@ -31,11 +31,12 @@ class MlpMiqpPlanner final : public ClosedLoopPlanner {
   using Network = std::function<EgoControl(const Observation&)>;
 
   MlpMiqpPlanner(Config config, SceneClassifier classify, Network network,
-                 std::shared_ptr<const expert::LaneChangeSolver> solver);
+                 std::shared_ptr<const expert::LaneChangeSolver> solver,
+                 std::string name = "mlp-miqp");
   /// The SVM (13 features) and the action network of a trained model.
   MlpMiqpPlanner(Config config, const std::shared_ptr<const learn::Model>& model,
                  std::shared_ptr<const expert::LaneChangeSolver> solver);
-  [[nodiscard]] std::string_view name() const override { return "mlp-miqp"; }
+  [[nodiscard]] std::string_view name() const override { return name_; }
   [[nodiscard]] std::unique_ptr<PlannerSession> start(const Scenario& scene) const override;
 
   [[nodiscard]] const Config& config() const { return config_; }
@@ -50,7 +51,17 @@ class MlpMiqpPlanner final : public ClosedLoopPlanner {
   SceneClassifier classify_;
   Network network_;
   expert::ExpertPlanner expert_;
+  std::string name_;
 };
+
+/// `mlp-miqp-oracle`: mlp-miqp with the model's classifier, its check and
+/// its take-over, whose "network" is the closed-loop expert itself, planning
+/// from every state it is asked about (the keeper's control where it finds
+/// no plan). A perfect imitation of the expert, so its take-overs are the
+/// ones no training of the network removes (docs/strategy.md, DAgger). Slow:
+/// an exact plan for every step of every look-ahead.
+[[nodiscard]] std::shared_ptr<const MlpMiqpPlanner> make_oracle_mlp_miqp(
+    const Config& config, const std::shared_ptr<const learn::Model>& model);
 
 class MlpMiqpSession final : public PlannerSession {
  public:

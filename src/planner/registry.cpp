@@ -37,18 +37,20 @@ class KeepLanePlanner final : public ClosedLoopPlanner {
 }  // namespace
 
 std::vector<std::string> planner_names() {
-  return {"miqp", "mlp-miqp", "strategy-qp", "keep-lane"};
+  return {"miqp", "mlp-miqp", "strategy-qp", "keep-lane", "mlp-miqp-oracle"};
 }
 
 std::shared_ptr<const ClosedLoopPlanner> make_planner(std::string_view name, const Config& config,
                                                       const std::string& model_dir) {
-  if (name == "mlp-miqp") {
+  if (name == "mlp-miqp" || name == "mlp-miqp-oracle") {
     if (model_dir.empty()) {
-      throw InputError("--model", "mlp-miqp needs a model directory (lanechange train)");
+      throw InputError("--model",
+                       std::string(name) + " needs a model directory (lanechange train)");
     }
     // The network's inputs are checked by name when the planner maps them
     // onto an observation; the closed loop's config may differ from the data's.
     auto model = std::make_shared<const learn::Model>(learn::Model::load(model_dir));
+    if (name == "mlp-miqp-oracle") return make_oracle_mlp_miqp(config, model);
     return std::make_shared<MlpMiqpPlanner>(config, std::move(model),
                                             std::make_shared<expert::FastLaneChangeSolver>());
   }

@@ -46,8 +46,10 @@ TEST(Experiments, ATinyRunWritesEveryTableAndFigureAndARerunReusesItsStages) {
         "the take-overs from states the network drove to", "taken over at the start"}) {
     EXPECT_NE(md.find(section), std::string::npos) << section;
   }
-  // Every planner has a row in Table II, and every row has a number of scenes.
+  // Every planner has a row in Table II, and every row has a number of scenes;
+  // but the oracle, a diagnostic an exact plan per look-ahead step slows.
   for (const auto& planner : baselines::planner_names()) {
+    if (planner == "mlp-miqp-oracle") continue;
     EXPECT_NE(md.find("| " + planner + " | 3 |"), std::string::npos) << planner;
   }
   // Every picture the report names exists, and the HTML embeds it. (No

@@ -239,6 +239,20 @@ TEST(MlpMiqp, ATrainedModelDrivesTheLoopWithoutCollision) {
   EXPECT_EQ(
       testing::run_cli("simulate --planner mlp-miqp --scenario " + dir.file("s.json")).exit_code,
       2);  // no --model
+
+  // The oracle: the same classifier and check, the expert in the network's
+  // place. On the open road the expert changes lanes, and so does it.
+  const auto oracle = testing::run_cli(
+      "--config " + dir.file("untimed.json") + " simulate --planner mlp-miqp-oracle --model " +
+      dir.file("model") + " --scenario " + dir.file("s.json") + " --out " + dir.file("o.json"));
+  ASSERT_EQ(oracle.exit_code, 0) << oracle.output;
+  const auto oracle_rollout = nlohmann::json::parse(testing::read_text(dir.file("o.json")));
+  EXPECT_EQ(oracle_rollout["planner"], "mlp-miqp-oracle");
+  EXPECT_EQ(oracle_rollout["outcome"], "well_posed");
+  EXPECT_FALSE(oracle_rollout["collision"].get<bool>());
+  EXPECT_EQ(testing::run_cli("simulate --planner mlp-miqp-oracle --scenario " + dir.file("s.json"))
+                .exit_code,
+            2);
 }
 
 }  // namespace
