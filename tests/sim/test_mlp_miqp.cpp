@@ -226,33 +226,34 @@ TEST(MlpMiqp, ATrainedModelDrivesTheLoopWithoutCollision) {
   testing::write_text(dir.file("s.json"), scenario_to_json(testing::open_road_scenario()).dump());
   testing::write_text(dir.file("untimed.json"),
                       nlohmann::json({{"closed_loop", {{"step_budget_ms", 1e9}}}}).dump());
-  const auto run = testing::run_cli(
-      "--config " + dir.file("untimed.json") + " simulate --planner mlp-miqp --model " +
-      dir.file("model") + " --scenario " + dir.file("s.json") + " --out " + dir.file("r.json"));
-  ASSERT_EQ(run.exit_code, 0) << run.output;
-  const auto rollout = nlohmann::json::parse(testing::read_text(dir.file("r.json")));
+  // One rollout of `planner` on the open road; exit code 2 without --model.
+  auto drive = [&dir](const std::string& planner) {
+    const std::string out = dir.file(planner + ".json");
+    const auto run = testing::run_cli(
+        "--config " + dir.file("untimed.json") + " simulate --planner " + planner + " --model " +
+        dir.file("model") + " --scenario " + dir.file("s.json") + " --out " + out);
+    EXPECT_EQ(run.exit_code, 0) << run.output;
+    EXPECT_EQ(
+        testing::run_cli("simulate --planner " + planner + " --scenario " + dir.file("s.json"))
+            .exit_code,
+        2);
+    return run.exit_code == 0 ? nlohmann::json::parse(testing::read_text(out)) : nlohmann::json{};
+  };
+  const auto rollout = drive("mlp-miqp");
+  ASSERT_FALSE(rollout.is_null());
   EXPECT_EQ(rollout["planner"], "mlp-miqp");
   EXPECT_FALSE(rollout["collision"].get<bool>());
   const std::string outcome = rollout["outcome"];
   EXPECT_NO_THROW((void)sim::outcome_from_string(outcome));
   EXPECT_EQ(rollout["t"].size(), rollout["ego"]["y"].size());
-  EXPECT_EQ(
-      testing::run_cli("simulate --planner mlp-miqp --scenario " + dir.file("s.json")).exit_code,
-      2);  // no --model
 
   // The oracle: the same classifier and check, the expert in the network's
   // place. On the open road the expert changes lanes, and so does it.
-  const auto oracle = testing::run_cli(
-      "--config " + dir.file("untimed.json") + " simulate --planner mlp-miqp-oracle --model " +
-      dir.file("model") + " --scenario " + dir.file("s.json") + " --out " + dir.file("o.json"));
-  ASSERT_EQ(oracle.exit_code, 0) << oracle.output;
-  const auto oracle_rollout = nlohmann::json::parse(testing::read_text(dir.file("o.json")));
-  EXPECT_EQ(oracle_rollout["planner"], "mlp-miqp-oracle");
-  EXPECT_EQ(oracle_rollout["outcome"], "well_posed");
-  EXPECT_FALSE(oracle_rollout["collision"].get<bool>());
-  EXPECT_EQ(testing::run_cli("simulate --planner mlp-miqp-oracle --scenario " + dir.file("s.json"))
-                .exit_code,
-            2);
+  const auto oracle = drive("mlp-miqp-oracle");
+  ASSERT_FALSE(oracle.is_null());
+  EXPECT_EQ(oracle["planner"], "mlp-miqp-oracle");
+  EXPECT_EQ(oracle["outcome"], "well_posed");
+  EXPECT_FALSE(oracle["collision"].get<bool>());
 }
 
 }  // namespace
