@@ -60,6 +60,7 @@ class LearnerSession final : public planner::PlannerSession {
       // The take-over's state is where the network went wrong: always labelled.
       takeover_step_ = o.step;
       label(o);
+      if (labelling_.lookahead) label_lookahead();
       return d;
     }
     const int past = o.step - takeover_step_;
@@ -78,6 +79,16 @@ class LearnerSession final : public planner::PlannerSession {
   [[nodiscard]] int past_takeover_steps(const planner::Observation& o) const {
     const double dt = o.scene->horizon / o.scene->steps;
     return static_cast<int>(std::lround(labelling_.past_takeover_s / dt));
+  }
+
+  // The states the network would have driven to, which its check refused.
+  void label_lookahead() {
+    const auto* session = dynamic_cast<const planner::MlpMiqpSession*>(gate_.get());
+    if (session == nullptr) return;
+    const std::vector<planner::Observation>& ahead = session->lookahead();
+    for (std::size_t k = 1; k <= ahead.size(); ++k) {
+      if (k % static_cast<std::size_t>(labelling_.stride) == 0) label(ahead[k - 1]);
+    }
   }
 
   // The call miqp's re-plan makes, from the scene as it is now, but

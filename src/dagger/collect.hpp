@@ -33,6 +33,9 @@ struct Labelling {
   /// When gated: seconds past the take-over in which the expert's recovery
   /// is labelled too (HG-DAgger); 0: the labels end at the take-over.
   double past_takeover_s = 0.0;
+  /// When gated: label the failed look-ahead's states at the take-over
+  /// (DaggerOptions::label_lookahead).
+  bool lookahead = false;
 };
 
 /// Rolls the learner's network out on `scene` (with mlp-miqp's take-over

@@ -60,6 +60,8 @@ void validate(const DaggerOptions& o) {
           "must be in [0, 60] s");
   require(o.past_takeover_s == 0.0 || o.rollout == Rollout::Gated, "--dagger-past-takeover",
           "only goes with --dagger-rollout gated");
+  require(!o.label_lookahead || o.rollout == Rollout::Gated, "--dagger-label-lookahead",
+          "only goes with --dagger-rollout gated");
   require(o.eval_count >= 1, "--dagger-eval-count", "must be at least 1");
   require(o.eval_seed != o.scene_seed, "--dagger-eval-seed",
           "must differ from --dagger-seed: the evaluation scenes must be held out");
@@ -80,23 +82,26 @@ void validate(const DaggerOptions& o) {
 // What fixes the run's content; a resume must match it (rounds may grow).
 json run_parameters(const DaggerOptions& o) {
   const json config = o.config;
-  return {{"data", o.train.data_dirs},
-          {"train", o.train.config()},
-          {"scenes_per_round", o.scenes},
-          {"scene_seed", o.scene_seed},
-          {"stride", o.stride},
-          {"label_nodes", o.label_nodes},
-          {"eval_count", o.eval_count},
-          {"eval_seed", o.eval_seed},
-          {"label_time_limit_s", o.label_time_limit_s},
-          {"max_epochs", o.train.network.max_epochs},
-          {"every_scene", o.every_scene},
-          {"rollout", to_string(o.rollout)},
-          {"past_takeover_s", o.past_takeover_s},
-          {"fine_tune", o.fine_tune},
-          {"validate_on_dagger", o.validate_on_dagger},
-          {"base_model", o.base_model},
-          {"config", config}};
+  json p = {{"data", o.train.data_dirs},
+            {"train", o.train.config()},
+            {"scenes_per_round", o.scenes},
+            {"scene_seed", o.scene_seed},
+            {"stride", o.stride},
+            {"label_nodes", o.label_nodes},
+            {"eval_count", o.eval_count},
+            {"eval_seed", o.eval_seed},
+            {"label_time_limit_s", o.label_time_limit_s},
+            {"max_epochs", o.train.network.max_epochs},
+            {"every_scene", o.every_scene},
+            {"rollout", to_string(o.rollout)},
+            {"past_takeover_s", o.past_takeover_s},
+            {"fine_tune", o.fine_tune},
+            {"validate_on_dagger", o.validate_on_dagger},
+            {"base_model", o.base_model},
+            {"config", config}};
+  // Only when on: the runs from before the option resume as before.
+  if (o.label_lookahead) p["label_lookahead"] = true;
+  return p;
 }
 
 void prepare_work_dir(const DaggerOptions& o) {
@@ -215,6 +220,7 @@ Aggregate read_aggregate(const DaggerOptions& o) {
                     {"label_nodes", o.label_nodes},
                     {"rollout", to_string(o.rollout)},
                     {"past_takeover_s", o.past_takeover_s},
+                    {"label_lookahead", o.label_lookahead},
                     {"scenes_per_round", o.scenes},
                     {"closed_loop_config", closed_loop},
                     {"shards", json::array()}}}};
@@ -243,7 +249,7 @@ void add_round(Aggregate& a, const DaggerOptions& o, int round, std::ostream* pr
                                (round - 1) * o.scenes,
                                o.scenes,
                                {o.stride, o.label_nodes, o.label_time_limit_s, o.every_scene,
-                                o.rollout == Rollout::Gated, o.past_takeover_s},
+                                o.rollout == Rollout::Gated, o.past_takeover_s, o.label_lookahead},
                                o.jobs,
                                progress};
   const detail::RoundData got = detail::collect_round(job, data_dir(o), round - 1, a.count());

@@ -261,6 +261,7 @@ std::string MlpMiqpSession::roll_out(const Observation& now, EgoControl first) {
   w.scene = scene_now(now, config);
   w.traffic.emplace(*w.scene, config);
   w.ego.assign(1, now.ego);
+  w.ahead.clear();
   w.cars = {};
   w.cars.dt = dt;
   for (const Car c : kAllCars) {
@@ -316,6 +317,7 @@ std::string MlpMiqpSession::extend_window() {
   Window& w = window_;
   const double dt = w.cars.dt;
   w.ego.erase(w.ego.begin());
+  w.ahead.erase(w.ahead.begin());
   for (CarTrack& track : w.cars.cars) {
     track.x.erase(track.x.begin());
     track.v.erase(track.v.begin());
@@ -367,6 +369,7 @@ void MlpMiqpSession::advance_window(double dt) {
     track.v.push_back(car.v);
     track.a.push_back(car.a);
   }
+  w.ahead.push_back(o);
   w.next = network_control(o);
 }
 

@@ -67,6 +67,10 @@ class MlpMiqpSession final : public PlannerSession {
  public:
   MlpMiqpSession(const MlpMiqpPlanner& planner, bool tries);
   [[nodiscard]] Decision act(const Observation& observation) override;
+  /// The look-ahead's predicted observations, one step ahead onwards: the
+  /// states the network would drive to. After a check that failed, they end
+  /// at the node that failed it (DAgger labels them).
+  [[nodiscard]] const std::vector<Observation>& lookahead() const { return window_.ahead; }
 
  private:
   /// The look-ahead's predicted path, kept from one step to the next: while
@@ -79,6 +83,7 @@ class MlpMiqpSession final : public PlannerSession {
     std::optional<Scenario> scene;        ///< the scene of the last full roll-out
     std::optional<TrafficModel> traffic;  ///< the cars at node n
     Observation last;                     ///< the observation at node n
+    std::vector<Observation> ahead;       ///< nodes 1..n
     EgoControl next;                      ///< the network's control at node n
   };
 

@@ -154,6 +154,43 @@ TEST(Dagger, GatedLabelsGoOnPastTheTakeOverForTheGivenTime) {
   }
 }
 
+// With the look-ahead labelled, the take-over adds the states the network
+// would have driven to (the check's prediction, up to the node that failed
+// it), every stride-th, on the rollout's clock after the take-over's state.
+TEST(Dagger, GatedLabelsTakeTheFailedLookAheadToo) {
+  const Config config = small_config();
+  const planner::MlpMiqpPlanner learner = constant_learner(config, {0.0, 0.05});
+  const Scenario scene = testing::open_road_scenario();
+  const double dt = scene.horizon / scene.steps;
+  const int stride = 2;
+  dagger::detail::Labelling labelling{stride, 1, 60.0, false, true};
+  const auto at = dagger::detail::collect_scene(scene, learner, config, labelling);
+  labelling.lookahead = true;
+  const auto ahead = dagger::detail::collect_scene(scene, learner, config, labelling);
+  ASSERT_GE(at.size(), 1U);
+  ASSERT_GT(ahead.size(), at.size());
+  const auto lookahead_steps = static_cast<std::size_t>(config.closed_loop.lookahead / dt + 0.5);
+  EXPECT_LE(ahead.size() - at.size(), lookahead_steps / stride);
+  for (std::size_t i = 0; i < at.size(); ++i) {
+    ASSERT_EQ(ahead[i].outcome.trajectory.nodes(), at[i].outcome.trajectory.nodes());
+    if (at[i].outcome.trajectory.nodes() > 0) {
+      EXPECT_EQ(ahead[i].outcome.trajectory.ego[0].y, at[i].outcome.trajectory.ego[0].y);
+    }
+  }
+  const Trajectory& takeover = at.back().outcome.trajectory;
+  ASSERT_GT(takeover.nodes(), 0);
+  double last_y = takeover.ego[0].y;
+  for (std::size_t j = at.size(); j < ahead.size(); ++j) {
+    const Trajectory& p = ahead[j].outcome.trajectory;
+    if (p.nodes() == 0) continue;
+    const auto k = static_cast<double>((j - at.size() + 1) * stride);
+    EXPECT_NEAR(p.t[0], takeover.t[0] + k * dt, 1e-9) << j;
+    // The network steers left all along: its predicted states drift left.
+    EXPECT_GT(p.ego[0].y, last_y) << j;
+    last_y = p.ego[0].y;
+  }
+}
+
 // mlp-miqp never lets the network drive a scene its classifier refuses, so
 // by default neither does DAgger; every_scene restores the first version.
 TEST(Dagger, ScenesTheClassifierRefusesAreNotRolledOut) {
@@ -352,7 +389,7 @@ TEST_F(DaggerCli, BadOptionsAreRefusedAndWriteNothing) {
         "--dagger 1 --dagger-eval-seed 7001", "--dagger 1 --dagger-label-nodes -1",
         "--dagger-scenes 5", "--dagger-every-scene", "--dagger-validate-all",
         "--dagger 1 --dagger-rollout sideways", "--dagger-rollout gated",
-        "--dagger 1 --dagger-past-takeover 1",
+        "--dagger 1 --dagger-past-takeover 1", "--dagger 1 --dagger-label-lookahead",
         "--dagger 1 --dagger-rollout gated "
         "--dagger-past-takeover -1"}) {
     std::string options = bad;

@@ -51,6 +51,11 @@ struct DaggerOptions {
   /// drives through (its recovery from the network's state) are labelled
   /// too, as HG-DAgger does; 0: the labels end at the take-over.
   double past_takeover_s = 0.0;
+  /// Gated only: at the take-over, the states of the look-ahead that failed
+  /// the check (where the network would have driven, up to the failing
+  /// node) are labelled too, every stride-th; mlp-miqp's check rolls the
+  /// network out there, so those are the states that decide a take-over.
+  bool label_lookahead = false;
   /// Each round's retrain starts from the last round's network and keeps
   /// round 0's standardizers, instead of fresh weights on refitted ones.
   bool fine_tune = false;
