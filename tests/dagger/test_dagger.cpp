@@ -133,11 +133,17 @@ TEST(Dagger, GatedLabelsEndAtTheTakeOver) {
 // With time past the take-over, the expert's recovery is labelled too
 // (HG-DAgger): at stride 1 the labelled states are mlp-miqp's own rollout,
 // cut that many steps after the take-over.
+// A learner that steers left from the start, on the open road: mlp-miqp's
+// check takes over after a few steps.
+struct SteeringLeft {
+  Config config = small_config();
+  planner::MlpMiqpPlanner learner = constant_learner(config, {0.0, 0.05});
+  Scenario scene = testing::open_road_scenario();
+  double dt = scene.horizon / scene.steps;
+};
+
 TEST(Dagger, GatedLabelsGoOnPastTheTakeOverForTheGivenTime) {
-  const Config config = small_config();
-  const planner::MlpMiqpPlanner learner = constant_learner(config, {0.0, 0.05});
-  const Scenario scene = testing::open_road_scenario();
-  const double dt = scene.horizon / scene.steps;
+  const auto [config, learner, scene, dt] = SteeringLeft{};
   const int past_steps = 4;
   const sim::Rollout mlp_miqp = sim::simulate(scene, learner, config);
   const auto at = dagger::detail::collect_scene(scene, learner, config, {1, 1, 60.0, false, true});
@@ -158,10 +164,7 @@ TEST(Dagger, GatedLabelsGoOnPastTheTakeOverForTheGivenTime) {
 // would have driven to (the check's prediction, up to the node that failed
 // it), every stride-th, on the rollout's clock after the take-over's state.
 TEST(Dagger, GatedLabelsTakeTheFailedLookAheadToo) {
-  const Config config = small_config();
-  const planner::MlpMiqpPlanner learner = constant_learner(config, {0.0, 0.05});
-  const Scenario scene = testing::open_road_scenario();
-  const double dt = scene.horizon / scene.steps;
+  const auto [config, learner, scene, dt] = SteeringLeft{};
   const int stride = 2;
   dagger::detail::Labelling labelling{stride, 1, 60.0, false, true};
   const auto at = dagger::detail::collect_scene(scene, learner, config, labelling);
