@@ -103,6 +103,8 @@ void add_dagger_options(CLI::App& cmd, TrainArgs& a) {
                      "Gated: seconds of the expert's recovery after the take-over, labelled"),
       cmd.add_flag("--dagger-label-lookahead", d.label_lookahead,
                    "Gated: label the states of the look-ahead that failed the check"),
+      cmd.add_option("--dagger-learning-rate", d.retrain_learning_rate,
+                     "Adam's learning rate in the retrains (0: round 0's)"),
       cmd.add_flag("--dagger-fine-tune", d.fine_tune,
                    "Each retrain starts from the last round's network and its standardizers"),
       cmd.add_flag("--dagger-validate-all", d.validate_on_dagger,

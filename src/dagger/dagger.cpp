@@ -62,6 +62,8 @@ void validate(const DaggerOptions& o) {
           "only goes with --dagger-rollout gated");
   require(!o.label_lookahead || o.rollout == Rollout::Gated, "--dagger-label-lookahead",
           "only goes with --dagger-rollout gated");
+  require(o.retrain_learning_rate >= 0.0 && o.retrain_learning_rate <= 1.0,
+          "--dagger-learning-rate", "must be in [0, 1] (0: round 0's)");
   require(o.eval_count >= 1, "--dagger-eval-count", "must be at least 1");
   require(o.eval_seed != o.scene_seed, "--dagger-eval-seed",
           "must differ from --dagger-seed: the evaluation scenes must be held out");
@@ -101,6 +103,7 @@ json run_parameters(const DaggerOptions& o) {
             {"config", config}};
   // Only when on: the runs from before the option resume as before.
   if (o.label_lookahead) p["label_lookahead"] = true;
+  if (o.retrain_learning_rate > 0.0) p["retrain_learning_rate"] = o.retrain_learning_rate;
   return p;
 }
 
@@ -425,6 +428,9 @@ DaggerReport run(const DaggerOptions& options, std::ostream* progress) {
       retrain.data_dirs.push_back(data_dir(options));
       retrain.out_dir = model_dir(options, r);
       retrain.network = options.train.network;
+      if (options.retrain_learning_rate > 0.0) {
+        retrain.network.learning_rate = options.retrain_learning_rate;
+      }
       retrain.plots = options.train.plots;
       retrain.progress = options.train.progress;
       retrain.validate_on_added = options.validate_on_dagger;

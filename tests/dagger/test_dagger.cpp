@@ -385,6 +385,29 @@ TEST_F(DaggerCli, OneRoundAddsLabelsAsAValidDataSetAndTabulatesEachRound) {
   EXPECT_THROW((void)dagger::read_report(dir_.file("nowhere")), InputError);
 }
 
+// The retrains' learning rate: fine-tuned at a vanishing rate, round 1's
+// network acts as round 0's; at round 0's rate it moves.
+TEST_F(DaggerCli, TheRetrainsLearnAtTheirOwnRate) {
+  auto largest_move = [this](const std::string& rate) {
+    const std::string work = dir_.file("work" + rate);
+    const auto run = train("--dagger 1 --dagger-fine-tune --dagger-dir " + work +
+                           " --dagger-scenes 8 --dagger-stride 2 --dagger-eval-count 2" +
+                           (rate.empty() ? "" : " --dagger-learning-rate " + rate));
+    EXPECT_EQ(run.exit_code, 0) << run.output;
+    const learn::Policy before(policy_of(work + "/model-0")), after(policy_of(work + "/model-1"));
+    const auto data = learn::load_learning_data({data_});
+    double moved = 0.0;
+    for (Eigen::Index r = 0; r < std::min<Eigen::Index>(data.samples.rows(), 50); ++r) {
+      const learn::Observation x = data.samples.inputs.row(r).transpose();
+      moved = std::max(moved, (after.act(x) - before.act(x)).cwiseAbs().maxCoeff());
+    }
+    return moved;
+  };
+  const double vanishing = largest_move("1e-30");
+  EXPECT_LT(vanishing, 1e-3);
+  EXPECT_GT(largest_move(""), 10.0 * vanishing + 1e-3);
+}
+
 TEST_F(DaggerCli, BadOptionsAreRefusedAndWriteNothing) {
   const std::string work = dir_.file("work");
   for (const char* bad :
@@ -393,6 +416,7 @@ TEST_F(DaggerCli, BadOptionsAreRefusedAndWriteNothing) {
         "--dagger-scenes 5", "--dagger-every-scene", "--dagger-validate-all",
         "--dagger 1 --dagger-rollout sideways", "--dagger-rollout gated",
         "--dagger 1 --dagger-past-takeover 1", "--dagger 1 --dagger-label-lookahead",
+        "--dagger 1 --dagger-learning-rate -1", "--dagger 1 --dagger-learning-rate 2",
         "--dagger 1 --dagger-rollout gated "
         "--dagger-past-takeover -1"}) {
     std::string options = bad;

@@ -59,6 +59,9 @@ struct DaggerOptions {
   /// Each round's retrain starts from the last round's network and keeps
   /// round 0's standardizers, instead of fresh weights on refitted ones.
   bool fine_tune = false;
+  /// Adam's learning rate in the retrains; 0: round 0's. A fine-tune at a
+  /// smaller rate stays nearer the last round's network.
+  double retrain_learning_rate = 0.0;
   /// Early stopping of a retrain also on DAgger rows (the first version's
   /// behaviour); by default on the base's own validation rows only.
   bool validate_on_dagger = false;
