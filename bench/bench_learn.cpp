@@ -26,7 +26,7 @@ Eigen::MatrixXd random_matrix(Eigen::Index rows, Eigen::Index cols, std::uint64_
   return m;
 }
 
-lc::PolicyWeights random_policy() {
+lc::PolicyWeights random_policy(int width) {
   lc::PolicyWeights w;
   for (int i = 0; i < kInputs; ++i) w.inputs.push_back(std::to_string(i));
   w.outputs = {"a", "omega"};
@@ -35,16 +35,18 @@ lc::PolicyWeights random_policy() {
   w.output_mean = Eigen::Vector2d::Zero();
   w.output_scale = Eigen::Vector2d::Ones();
   for (int l = 0; l <= lc::kHiddenLayers; ++l) {
-    const int rows = l == lc::kHiddenLayers ? lc::kActions : lc::kHiddenWidth;
-    const int cols = l == 0 ? kInputs : lc::kHiddenWidth;
+    const int rows = l == lc::kHiddenLayers ? lc::kActions : width;
+    const int cols = l == 0 ? kInputs : width;
     w.weights.push_back((0.3 * random_matrix(rows, cols, 10 + l)).cast<float>());
     w.biases.push_back((0.1 * random_matrix(rows, 1, 40 + l)).cast<float>());
   }
   return w;
 }
 
+// The argument is the hidden layers' width: the paper's 10 first (the
+// performance report reads that line), then wider ones (train --network-width).
 void BM_PolicyAct(benchmark::State& state) {
-  const lc::Policy policy(random_policy());
+  const lc::Policy policy(random_policy(static_cast<int>(state.range(0))));
   lc::Observation obs = random_matrix(kInputs, 1, 3);
   for (auto _ : state) {
     benchmark::DoNotOptimize(obs.data());
@@ -53,7 +55,12 @@ void BM_PolicyAct(benchmark::State& state) {
     obs(0) += 1e-9;
   }
 }
-BENCHMARK(BM_PolicyAct)->Repetitions(5)->ReportAggregatesOnly(true);
+BENCHMARK(BM_PolicyAct)
+    ->Arg(lc::kHiddenWidth)
+    ->Arg(32)
+    ->Arg(lc::kMaxHiddenWidth)
+    ->Repetitions(5)
+    ->ReportAggregatesOnly(true);
 
 void BM_ClassifierDecision(benchmark::State& state) {
   const auto kind = lc::kClassifierKinds[static_cast<std::size_t>(state.range(0))];

@@ -8,6 +8,8 @@ namespace {
 
 using nlohmann::json;
 
+constexpr int kLazyWidth = 16;
+
 std::vector<double> to_vector(const Eigen::VectorXd& v) { return {v.begin(), v.end()}; }
 
 Eigen::VectorXd vector_at(const json& j, const char* key) {
@@ -104,15 +106,25 @@ Eigen::Vector2d Policy::act(const Observation& observation) const {
                                         std::to_string(in_mean_.size()));
   }
   // Single precision as in training; Eigen vectorises tanh for floats.
-  // Lazy products into the bounded vectors: no heap, and none of the GEMV
-  // kernel's set-up, which costs as much as these small layers (BM_PolicyAct).
+  // Into bounded vectors: no heap. Up to kLazyWidth the coefficient-wise
+  // (lazy) product is faster, since the GEMV kernel's set-up costs as much
+  // as such a layer; above it the kernel wins (BM_PolicyAct/10, /32, /64).
   const Observation z = (observation - in_mean_).cwiseProduct(in_inverse_scale_);
+  const bool lazy = width() <= kLazyWidth;
   Hidden h(width());
   Hidden next(width());
-  h.noalias() = weights_[0].lazyProduct(z.cast<float>());
+  if (lazy) {
+    h.noalias() = weights_[0].lazyProduct(z.cast<float>());
+  } else {
+    h.noalias() = weights_[0] * z.cast<float>();
+  }
   h = (h + biases_[0]).array().tanh().matrix();
   for (std::size_t l = 1; l < kHiddenLayers; ++l) {
-    next.noalias() = weights_[l].lazyProduct(h);
+    if (lazy) {
+      next.noalias() = weights_[l].lazyProduct(h);
+    } else {
+      next.noalias() = weights_[l] * h;
+    }
     h = (next + biases_[l]).array().tanh().matrix();
   }
   Eigen::Vector2f out;
