@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <utility>
 
 namespace lanechange::expert {
 
@@ -653,10 +654,12 @@ struct InteriorPointMethod {
       const double alpha_affine = solve_step();
       const double mu_affine = complementarity_after(alpha_affine);
       const double centering = std::pow(mu_affine / mu, 3);
-      ws.dt_aff_ = ws.dt_;
-      ws.dlambda_aff_ = ws.dlambda_;
-      ws.dsigma_aff_ = ws.dsigma_;
-      ws.dlambda_soft_aff_ = ws.dlambda_soft_;
+      // Kept by swapping, not copying: the corrector's solve_step writes
+      // every entry it reads again (the soft ones only for soft rows).
+      std::swap(ws.dt_aff_, ws.dt_);
+      std::swap(ws.dlambda_aff_, ws.dlambda_);
+      std::swap(ws.dsigma_aff_, ws.dsigma_);
+      std::swap(ws.dlambda_soft_aff_, ws.dlambda_soft_);
       // Corrector: aim at the centred point, with Mehrotra's second-order term.
       const double target = centering * mu;
       newton_gradient(
