@@ -111,20 +111,19 @@ Eigen::Vector2d Policy::act(const Observation& observation) const {
   // as such a layer; above it the kernel wins (BM_PolicyAct/10, /32, /64).
   const Observation z = (observation - in_mean_).cwiseProduct(in_inverse_scale_);
   const bool lazy = width() <= kLazyWidth;
+  auto multiply = [lazy](const Eigen::MatrixXf& weights, const auto& in, Hidden& out) {
+    if (lazy) {
+      out.noalias() = weights.lazyProduct(in);
+    } else {
+      out.noalias() = weights * in;
+    }
+  };
   Hidden h(width());
   Hidden next(width());
-  if (lazy) {
-    h.noalias() = weights_[0].lazyProduct(z.cast<float>());
-  } else {
-    h.noalias() = weights_[0] * z.cast<float>();
-  }
+  multiply(weights_[0], z.cast<float>(), h);
   h = (h + biases_[0]).array().tanh().matrix();
   for (std::size_t l = 1; l < kHiddenLayers; ++l) {
-    if (lazy) {
-      next.noalias() = weights_[l].lazyProduct(h);
-    } else {
-      next.noalias() = weights_[l] * h;
-    }
+    multiply(weights_[l], h, next);
     h = (next + biases_[l]).array().tanh().matrix();
   }
   Eigen::Vector2f out;
