@@ -265,8 +265,13 @@ void StrategyQpPlanner::follow_screened(const Scenario& scene, const expert::Pla
     // A candidate cut off in the screen has none, and starts where its
     // screen did.
     const bool screened = screens[i].has_solution();
+    // The rounds solve in the screen's workspace: it carries the state
+    // bounds the screens found binding, and a fresh one would solve the
+    // first round twice to find them again. (A session's own workspace stays
+    // with the last plan's modes, for the next step's warm start.)
     const expert::PlanHints from_screen{screened ? &screens[i].path : list[i].first_point(hints),
-                                        nullptr, screened || list[i].starts_from_plan(hints)};
+                                        nullptr, screened || list[i].starts_from_plan(hints),
+                                        workspace.get()};
     CandidateOutcome& o = out.candidates[i];
     const std::string strategy = o.strategy;
     const double screen_objective = o.screen_objective;
