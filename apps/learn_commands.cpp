@@ -108,7 +108,14 @@ void add_dagger_options(CLI::App& cmd, TrainArgs& a) {
       cmd.add_flag("--dagger-fine-tune", d.fine_tune,
                    "Each retrain starts from the last round's network and its standardizers"),
       cmd.add_flag("--dagger-validate-all", d.validate_on_dagger,
-                   "Early stopping of a retrain also on DAgger rows (the first version)")};
+                   "Early stopping of a retrain also on DAgger rows (the first version)"),
+      cmd.add_option("--dagger-candidates", d.candidates,
+                     "Retrains per round (network seeds 0..K-1); the fewest take-overs on the "
+                     "selection scenes wins (1: no selection)"),
+      cmd.add_option("--dagger-select-count", d.select_count,
+                     "Selection scenes, drawn like the training scenes"),
+      cmd.add_option("--dagger-select-seed", d.select_seed,
+                     "Sampler seed of the selection scenes (not the held-out ones)")};
   for (CLI::Option* option : a.dagger_only) option->capture_default_str();
 }
 

@@ -65,6 +65,12 @@ void validate(const DaggerOptions& o) {
   require(o.retrain_learning_rate >= 0.0 && o.retrain_learning_rate <= 1.0,
           "--dagger-learning-rate", "must be in [0, 1] (0: round 0's)");
   require(o.eval_count >= 1, "--dagger-eval-count", "must be at least 1");
+  require(o.candidates >= 1 && o.candidates <= 20, "--dagger-candidates", "must be in [1, 20]");
+  require(o.select_count >= 1, "--dagger-select-count", "must be at least 1");
+  require(o.candidates == 1 || (o.select_seed != o.eval_seed && o.select_seed != o.scene_seed),
+          "--dagger-select-seed",
+          "must differ from --dagger-eval-seed and --dagger-seed: selection scenes are neither "
+          "held out nor labelled");
   require(o.eval_seed != o.scene_seed, "--dagger-eval-seed",
           "must differ from --dagger-seed: the evaluation scenes must be held out");
   require(o.label_time_limit_s > 0.0, "label_time_limit_s", "must be positive");
@@ -104,6 +110,11 @@ json run_parameters(const DaggerOptions& o) {
   // Only when on: the runs from before the option resume as before.
   if (o.label_lookahead) p["label_lookahead"] = true;
   if (o.retrain_learning_rate > 0.0) p["retrain_learning_rate"] = o.retrain_learning_rate;
+  if (o.candidates > 1) {
+    p["candidates"] = o.candidates;
+    p["select_count"] = o.select_count;
+    p["select_seed"] = o.select_seed;
+  }
   return p;
 }
 
@@ -166,13 +177,20 @@ std::vector<char> driven_scenes(const DaggerOptions& o) {
   return driven;
 }
 
-// The held-out evaluation of one planner; evaluate resumes on its own.
-RoundRow evaluate(const DaggerOptions& o, const std::string& planner, const std::string& model,
-                  const std::string& name, int round, const std::vector<char>& driven,
-                  std::ostream* progress) {
+struct Scenes {
+  long long count;
+  std::uint64_t seed;
+};
+
+Scenes held_out(const DaggerOptions& o) { return {o.eval_count, o.eval_seed}; }
+
+// One planner's evaluation on `scenes`; evaluate resumes on its own.
+RoundRow evaluate(const DaggerOptions& o, Scenes scenes, const std::string& planner,
+                  const std::string& model, const std::string& name, int round,
+                  const std::vector<char>& driven, std::ostream* progress) {
   sim::EvaluateOptions e;
-  e.count = o.eval_count;
-  e.seed = o.eval_seed;
+  e.count = scenes.count;
+  e.seed = scenes.seed;
   e.planners = {planner};
   e.model_dir = model;
   e.out_dir = (fs::path(o.work_dir) / name).string();
@@ -184,9 +202,10 @@ RoundRow evaluate(const DaggerOptions& o, const std::string& planner, const std:
   RoundRow row = score((fs::path(e.out_dir) / "rollouts.csv").string(), planner, round, driven);
   if (progress != nullptr) {
     *progress << "dagger: "
-              << (round < 0 ? std::string("reference") : "round " + std::to_string(round)) << ", "
-              << planner << ": success " << row.success_rate << ", take-overs per rollout "
-              << row.takeovers_per_rollout << ", collisions " << row.collision_rate << std::endl;
+              << (round < 0 ? std::string("reference") : "round " + std::to_string(round)) << " ("
+              << name << "), " << planner << ": success " << row.success_rate
+              << ", take-overs per rollout " << row.takeovers_per_rollout << ", collisions "
+              << row.collision_rate << std::endl;
   }
   return row;
 }
@@ -319,6 +338,69 @@ void write_tables(const DaggerOptions& o, const DaggerReport& report) {
   lanechange::detail::write_file_atomically((dir / "dagger.md").string(), markdown_table(report));
 }
 
+void retrain(const DaggerOptions& o, int round, const std::string& out,
+             std::uint64_t network_seed_offset) {
+  learn::RetrainOptions retrain;
+  retrain.base_model = model_dir(o, 0);
+  retrain.data_dirs = o.train.data_dirs;
+  retrain.data_dirs.push_back(data_dir(o));
+  retrain.out_dir = out;
+  retrain.network = o.train.network;
+  if (o.retrain_learning_rate > 0.0) retrain.network.learning_rate = o.retrain_learning_rate;
+  retrain.plots = o.train.plots;
+  retrain.progress = o.train.progress;
+  retrain.validate_on_added = o.validate_on_dagger;
+  retrain.network_seed_offset = network_seed_offset;
+  if (o.fine_tune) retrain.warm_start = model_dir(o, round - 1);
+  retrain.note = {{"dagger_round", round}, {"data", data_dir(o)}};
+  (void)learn::retrain_network(retrain);
+}
+
+// Round r's candidates, each retrained and measured on the selection scenes
+// (each step resumes), and the best published as model-r. The held-out
+// scenes play no part in the choice.
+void select_retrain(const DaggerOptions& o, int round, std::vector<Candidate>& table,
+                    std::ostream* progress) {
+  const std::string prefix = "round-" + std::to_string(round) + "-candidate-";
+  const std::size_t first = table.size();
+  std::size_t best = first;
+  for (int j = 0; j < o.candidates; ++j) {
+    const std::string model = (fs::path(o.work_dir) / (prefix + std::to_string(j))).string();
+    const auto offset = static_cast<std::uint64_t>(j);
+    if (!has_model(model)) retrain(o, round, model, offset);
+    const RoundRow row =
+        evaluate(o, {o.select_count, o.select_seed}, "mlp-miqp", model,
+                 "select-" + std::to_string(round) + "-" + std::to_string(j), round, {}, progress);
+    table.push_back({round, j, offset, row.takeovers_per_rollout, row.success_rate, false});
+    const Candidate& c = table.back();
+    const bool better = c.takeovers_per_rollout < table[best].takeovers_per_rollout ||
+                        (c.takeovers_per_rollout == table[best].takeovers_per_rollout &&
+                         c.success_rate > table[best].success_rate);
+    if (table.size() == first + 1 || better) best = table.size() - 1;
+  }
+  table[best].chosen = true;
+  if (!has_model(model_dir(o, round))) {
+    publish_copy((fs::path(o.work_dir) / (prefix + std::to_string(table[best].candidate))).string(),
+                 model_dir(o, round));
+  }
+  if (progress != nullptr) {
+    *progress << "dagger: round " << round << ": candidate " << table[best].candidate
+              << " chosen (take-overs per rollout on the selection scenes "
+              << table[best].takeovers_per_rollout << ")" << std::endl;
+  }
+}
+
+void write_selection(const DaggerOptions& o, const std::vector<Candidate>& table) {
+  std::string csv =
+      "round,candidate,network_seed_offset,takeovers_per_rollout,success_rate,chosen\n";
+  for (const Candidate& c : table) {
+    csv += std::to_string(c.round) + ',' + std::to_string(c.candidate) + ',' +
+           std::to_string(c.network_seed_offset) + ',' + std::to_string(c.takeovers_per_rollout) +
+           ',' + std::to_string(c.success_rate) + ',' + (c.chosen ? "1" : "0") + '\n';
+  }
+  lanechange::detail::write_file_atomically((fs::path(o.work_dir) / "selection.csv").string(), csv);
+}
+
 }  // namespace
 
 std::vector<std::string> table_columns() {
@@ -413,33 +495,21 @@ DaggerReport run(const DaggerOptions& options, std::ostream* progress) {
     train.out_dir = model_dir(options, 0);
     (void)learn::train_models(train);
   }
-  report.expert = evaluate(options, "miqp", "", "eval-miqp", -1, {}, progress);
+  report.expert = evaluate(options, held_out(options), "miqp", "", "eval-miqp", -1, {}, progress);
   const std::vector<char> driven = driven_scenes(options);
-  report.rounds.push_back(
-      evaluate(options, "mlp-miqp", model_dir(options, 0), "eval-0", 0, driven, progress));
+  report.rounds.push_back(evaluate(options, held_out(options), "mlp-miqp", model_dir(options, 0),
+                                   "eval-0", 0, driven, progress));
   Aggregate aggregate = read_aggregate(options);
   long long samples = 0;
   for (int r = 1; r <= options.rounds; ++r) {
     if (static_cast<int>(aggregate.shards.size()) < r) add_round(aggregate, options, r, progress);
-    if (!has_model(model_dir(options, r))) {
-      learn::RetrainOptions retrain;
-      retrain.base_model = model_dir(options, 0);
-      retrain.data_dirs = options.train.data_dirs;
-      retrain.data_dirs.push_back(data_dir(options));
-      retrain.out_dir = model_dir(options, r);
-      retrain.network = options.train.network;
-      if (options.retrain_learning_rate > 0.0) {
-        retrain.network.learning_rate = options.retrain_learning_rate;
-      }
-      retrain.plots = options.train.plots;
-      retrain.progress = options.train.progress;
-      retrain.validate_on_added = options.validate_on_dagger;
-      if (options.fine_tune) retrain.warm_start = model_dir(options, r - 1);
-      retrain.note = {{"dagger_round", r}, {"data", data_dir(options)}};
-      (void)learn::retrain_network(retrain);
+    if (options.candidates > 1) {
+      select_retrain(options, r, report.candidates, progress);
+    } else if (!has_model(model_dir(options, r))) {
+      retrain(options, r, model_dir(options, r), 0);
     }
-    RoundRow row = evaluate(options, "mlp-miqp", model_dir(options, r), "eval-" + std::to_string(r),
-                            r, driven, progress);
+    RoundRow row = evaluate(options, held_out(options), "mlp-miqp", model_dir(options, r),
+                            "eval-" + std::to_string(r), r, driven, progress);
     row.labels = aggregate.labelled[static_cast<std::size_t>(r - 1)];
     samples += aggregate.samples[static_cast<std::size_t>(r - 1)];
     row.dagger_samples = samples;
@@ -447,6 +517,7 @@ DaggerReport run(const DaggerOptions& options, std::ostream* progress) {
   }
   if (options.rounds > 0) report.dataset_dir = data_dir(options);
   write_tables(options, report);
+  if (options.candidates > 1) write_selection(options, report.candidates);
   publish_copy(model_dir(options, options.rounds), options.train.out_dir);
   return report;
 }

@@ -503,14 +503,17 @@ TrainReport retrain_network(const RetrainOptions& options) {
   // The base's own validation rows, in the same order, give the same inner
   // split as the base's: early stopping is then like for like.
   std::vector<char> pool = options.validate_on_added ? std::vector<char>{} : split.base_rows;
-  Context c{train, data,    split.split,     Seeds(train.seed), staging,
-            base,  metrics, std::move(pool), options.warm_start};
+  Seeds seeds(train.seed);
+  seeds.network += options.network_seed_offset;
+  Context c{
+      train, data, split.split, seeds, staging, base, metrics, std::move(pool), options.warm_start};
   return build_and_publish(c, out, start, [&] {
     fs::copy(options.base_model, staging, fs::copy_options::recursive);
     train_action_network(c);
     c.model["data"] = describe_data(c);
     c.model["retrained_network"] = {{"base_model", options.base_model},
                                     {"warm_start", options.warm_start},
+                                    {"network_seed", seeds.network},
                                     {"note", options.note}};
     c.metrics["data"]["samples_network"] = data.samples.rows();
     c.metrics["network"]["validation"] = options.validate_on_added ? "all data sets" : "base's";

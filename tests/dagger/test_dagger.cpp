@@ -12,6 +12,7 @@
 #include "lanechange/learn/learn_data.hpp"
 #include "lanechange/learn/model.hpp"
 #include "lanechange/learn/train.hpp"
+#include "lanechange/sim/evaluate.hpp"
 #include "lanechange/sim/simulator.hpp"
 #include "test_helpers.hpp"
 
@@ -408,17 +409,70 @@ TEST_F(DaggerCli, TheRetrainsLearnAtTheirOwnRate) {
   EXPECT_GT(largest_move(""), 10.0 * vanishing + 1e-3);
 }
 
+// With candidates, a round retrains once per network seed, measures each on
+// the selection scenes and keeps the one with the fewest take-overs there.
+TEST_F(DaggerCli, ARoundKeepsTheRetrainWithTheFewestTakeOversOnTheSelectionScenes) {
+  const std::string work = dir_.file("work");
+  const auto run = train("--dagger 1 --dagger-dir " + work +
+                         " --dagger-scenes 8 --dagger-stride 2 --dagger-eval-count 2"
+                         " --dagger-candidates 2 --dagger-select-count 4 --dagger-select-seed 7"
+                         " --dagger-eval-seed 8");
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  const auto table = read_csv(work + "/selection.csv");
+  ASSERT_EQ(table.size(), 3U);  // header, two candidates of round 1
+  int chosen = -1;
+  std::vector<double> takeovers;
+  for (std::size_t r = 1; r < table.size(); ++r) {
+    const auto& row = table[r];
+    ASSERT_EQ(row.size(), table.front().size());
+    EXPECT_EQ(row[0], "1");
+    const std::string candidate = work + "/round-1-candidate-" + row[1];
+    // The number is the selection scenes' (select-1-j), not the held-out ones'.
+    const auto rollouts = sim::read_rollouts(work + "/select-1-" + row[1] + "/rollouts.csv");
+    ASSERT_EQ(rollouts.size(), 4U);
+    double sum = 0.0;
+    for (const auto& r4 : rollouts) sum += r4.takeovers;
+    EXPECT_NEAR(std::stod(row[3]), sum / 4.0, 1e-6);
+    takeovers.push_back(std::stod(row[3]));
+    if (row[5] == "1") {
+      EXPECT_EQ(chosen, -1) << "one candidate is chosen";
+      chosen = std::stoi(row[1]);
+    }
+  }
+  ASSERT_GE(chosen, 0);
+  EXPECT_LE(takeovers[static_cast<std::size_t>(chosen)], takeovers[1 - chosen]);
+  // Two seeds, two networks; the round's model is the chosen one.
+  const std::string policy0 = testing::read_text(work + "/round-1-candidate-0/policy.json");
+  const std::string policy1 = testing::read_text(work + "/round-1-candidate-1/policy.json");
+  EXPECT_NE(policy0, policy1);
+  EXPECT_EQ(testing::read_text(work + "/model-1/policy.json"), chosen == 0 ? policy0 : policy1);
+  EXPECT_EQ(read_csv(work + "/dagger.csv").size(), 4U);
+}
+
 TEST_F(DaggerCli, BadOptionsAreRefusedAndWriteNothing) {
   const std::string work = dir_.file("work");
-  for (const char* bad :
-       {"--dagger -1", "--dagger 1 --dagger-scenes 0", "--dagger 1 --dagger-stride 0",
-        "--dagger 1 --dagger-eval-seed 7001", "--dagger 1 --dagger-label-nodes -1",
-        "--dagger-scenes 5", "--dagger-every-scene", "--dagger-validate-all",
-        "--dagger 1 --dagger-rollout sideways", "--dagger-rollout gated",
-        "--dagger 1 --dagger-past-takeover 1", "--dagger 1 --dagger-label-lookahead",
-        "--dagger 1 --dagger-learning-rate -1", "--dagger 1 --dagger-learning-rate 2",
-        "--dagger 1 --dagger-rollout gated "
-        "--dagger-past-takeover -1"}) {
+  for (const char* bad : {"--dagger -1",
+                          "--dagger 1 --dagger-scenes 0",
+                          "--dagger 1 --dagger-stride 0",
+                          "--dagger 1 --dagger-eval-seed 7001",
+                          "--dagger 1 --dagger-label-nodes -1",
+                          "--dagger-scenes 5",
+                          "--dagger-every-scene",
+                          "--dagger-validate-all",
+                          "--dagger 1 --dagger-rollout sideways",
+                          "--dagger-rollout gated",
+                          "--dagger 1 --dagger-past-takeover 1",
+                          "--dagger 1 --dagger-label-lookahead",
+                          "--dagger 1 --dagger-learning-rate -1",
+                          "--dagger 1 --dagger-learning-rate 2",
+                          "--dagger 1 --dagger-candidates 0",
+                          "--dagger 1 --dagger-candidates 21",
+                          "--dagger 1 --dagger-candidates 2 --dagger-select-seed 2026",
+                          "--dagger 1 --dagger-candidates 2 --dagger-select-seed 7001",
+                          "--dagger 1 --dagger-candidates 2 --dagger-select-count 0",
+                          "--dagger-candidates 2",
+                          "--dagger 1 --dagger-rollout gated "
+                          "--dagger-past-takeover -1"}) {
     std::string options = bad;
     options += " --dagger-dir ";
     options += work;

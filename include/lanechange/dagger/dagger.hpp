@@ -62,6 +62,16 @@ struct DaggerOptions {
   /// Adam's learning rate in the retrains; 0: round 0's. A fine-tune at a
   /// smaller rate stays nearer the last round's network.
   double retrain_learning_rate = 0.0;
+  /// Retrains per round, each with its own network seed (the first with the
+  /// base's); the one with the fewest take-overs per rollout of mlp-miqp on
+  /// the selection scenes becomes the round's network. 1: one retrain, no
+  /// selection. Retrains differ by as much as a round changes the network,
+  /// so one retrain's take-overs are a draw, not the round's effect.
+  int candidates = 1;
+  /// Selection scenes: drawn like the training scenes, with their own seed
+  /// (never the held-out evaluation's), the same every round.
+  long long select_count = 300;
+  std::uint64_t select_seed = 7002;
   /// Early stopping of a retrain also on DAgger rows (the first version's
   /// behaviour); by default on the base's own validation rows only.
   bool validate_on_dagger = false;
@@ -93,8 +103,20 @@ struct RoundRow {
   long long dagger_samples = 0;  ///< well-posed sample rows in the aggregated data set so far
 };
 
+/// One retrain of a round with selection (DaggerOptions::candidates > 1),
+/// as selection.csv lists them.
+struct Candidate {
+  int round = 0;
+  int candidate = 0;  ///< 0..candidates-1
+  std::uint64_t network_seed_offset = 0;
+  double takeovers_per_rollout = 0.0;  ///< on the selection scenes
+  double success_rate = 0.0;           ///< on the selection scenes
+  bool chosen = false;
+};
+
 struct DaggerReport {
-  std::vector<RoundRow> rounds;  ///< round 0..R
+  std::vector<RoundRow> rounds;       ///< round 0..R
+  std::vector<Candidate> candidates;  ///< empty without selection
   RoundRow expert;
   std::string dataset_dir;  ///< the aggregated labels (none when R = 0)
 };

@@ -59,6 +59,9 @@ struct RetrainOptions {
   /// standardizers (DAgger's rounds fine-tune the last round's network);
   /// empty: fresh weights and standardizers fitted on all training rows.
   std::string warm_start;
+  /// Offset added to the network's seed (its initial weights, or a
+  /// fine-tune's batch order); the splits stay the base's. 0: the base's own.
+  std::uint64_t network_seed_offset = 0;
   bool plots = true;
   std::ostream* progress = nullptr;
   nlohmann::json note;  ///< recorded in model.json ("retrained_network")
