@@ -103,6 +103,8 @@ void add_dagger_options(CLI::App& cmd, TrainArgs& a) {
                      "Gated: seconds of the expert's recovery after the take-over, labelled"),
       cmd.add_flag("--dagger-label-lookahead", d.label_lookahead,
                    "Gated: label the states of the look-ahead that failed the check"),
+      cmd.add_flag("--dagger-fixed-strategy", d.fixed_strategy,
+                   "Label with the lane modes of the expert's plan from the scene's start fixed"),
       cmd.add_option("--dagger-learning-rate", d.retrain_learning_rate,
                      "Adam's learning rate in the retrains (0: round 0's)"),
       cmd.add_flag("--dagger-fine-tune", d.fine_tune,

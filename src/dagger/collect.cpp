@@ -6,9 +6,11 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <optional>
 #include <thread>
 
 #include "lanechange/data/progress.hpp"
+#include "lanechange/expert/lane_change_solver.hpp"
 #include "lanechange/sampler.hpp"
 #include "lanechange/sim/simulator.hpp"
 #include "planner/miqp_planner.hpp"
@@ -40,11 +42,43 @@ bool rolled_out(const Scenario& scene, const planner::MlpMiqpPlanner& learner,
   return labelling.every_scene || learner.tries(scene);
 }
 
+// The expert committed to its lane strategy for the scene: the mixed-integer
+// expert's plan jumps between strategies for states a few centimetres
+// apart, and labels from both sides of a jump contradict each other where the
+// network cannot tell the states apart. With the modes fixed, the plan is a
+// convex QP's, continuous in the state.
+class StrategyLabeller {
+ public:
+  StrategyLabeller(const planner::MlpMiqpPlanner& learner, const Scenario& scene)
+      : fixed_(learner.config(), std::make_shared<expert::FixedModeLaneChangeSolver>()),
+        plan_(learner.expert().plan(scene)) {}
+
+  // The plan from `now` (the scene at `step`) with the start's modes; none
+  // when the start had no converged plan.
+  [[nodiscard]] std::optional<data::detail::PlanOutcome> label(const Scenario& now, int step,
+                                                               double time_limit_s) const {
+    if (plan_.status != expert::PlanStatus::Converged) return std::nullopt;
+    const double dt = now.horizon / now.steps;
+    const std::vector<int> modes = planner::shifted(plan_.modes, step, now.steps);
+    const expert::Iterate guess = planner::shifted(plan_.path, step, now.steps, dt);
+    return data::detail::plan_outcome(fixed_, now, time_limit_s, {&guess, &modes, false});
+  }
+
+ private:
+  expert::ExpertPlanner fixed_;
+  expert::ExpertResult plan_;
+};
+
 class LearnerSession final : public planner::PlannerSession {
  public:
   LearnerSession(const planner::MlpMiqpPlanner& learner, const Labelling& labelling,
-                 std::vector<Query>& sink, std::unique_ptr<planner::PlannerSession> gate)
-      : learner_(learner), labelling_(labelling), sink_(sink), gate_(std::move(gate)) {}
+                 std::vector<Query>& sink, std::unique_ptr<planner::PlannerSession> gate,
+                 std::optional<StrategyLabeller> strategy)
+      : learner_(learner),
+        labelling_(labelling),
+        sink_(sink),
+        gate_(std::move(gate)),
+        strategy_(std::move(strategy)) {}
 
   [[nodiscard]] planner::Decision act(const planner::Observation& o) override {
     if (!gate_) {
@@ -95,6 +129,13 @@ class LearnerSession final : public planner::PlannerSession {
   // without a warm start: the learner's path is not the expert's.
   void label(const planner::Observation& o) {
     const Scenario now = planner::scene_now(o, learner_.config());
+    if (strategy_) {
+      auto fixed = strategy_->label(now, o.step, labelling_.time_limit_s);
+      if (fixed && fixed->label == Label::WellPosed) {
+        sink_.push_back(first_nodes(std::move(*fixed), o.t, labelling_.nodes));
+        return;
+      }
+    }
     sink_.push_back(
         first_nodes(data::detail::plan_outcome(learner_.expert(), now, labelling_.time_limit_s),
                     o.t, labelling_.nodes));
@@ -104,6 +145,7 @@ class LearnerSession final : public planner::PlannerSession {
   const Labelling& labelling_;
   std::vector<Query>& sink_;
   std::unique_ptr<planner::PlannerSession> gate_;  ///< mlp-miqp's session when gated
+  std::optional<StrategyLabeller> strategy_;       ///< Labelling::fixed_strategy
   int takeover_step_ = -1;                         ///< the gate's first take-over; -1: none yet
 };
 
@@ -115,8 +157,11 @@ class LearnerPlanner final : public planner::ClosedLoopPlanner {
   [[nodiscard]] std::string_view name() const override { return "dagger-learner"; }
   [[nodiscard]] std::unique_ptr<planner::PlannerSession> start(
       const Scenario& scene) const override {
+    std::optional<StrategyLabeller> strategy;
+    if (labelling_.fixed_strategy) strategy.emplace(learner_, scene);
     return std::make_unique<LearnerSession>(learner_, labelling_, sink_,
-                                            labelling_.gated ? learner_.start(scene) : nullptr);
+                                            labelling_.gated ? learner_.start(scene) : nullptr,
+                                            std::move(strategy));
   }
 
  private:

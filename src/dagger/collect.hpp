@@ -36,6 +36,12 @@ struct Labelling {
   /// When gated: label the failed look-ahead's states at the take-over
   /// (DaggerOptions::label_lookahead).
   bool lookahead = false;
+  /// Label with the expert's own lane strategy for the scene: its plan from
+  /// the scene's start gives the lane modes, and a state's label is the
+  /// plan with those modes fixed (shifted to the state's step), the free
+  /// search only where they leave no well-posed plan
+  /// (DaggerOptions::label_strategy).
+  bool fixed_strategy = false;
 };
 
 /// Rolls the learner's network out on `scene` (with mlp-miqp's take-over

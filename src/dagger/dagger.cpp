@@ -109,6 +109,7 @@ json run_parameters(const DaggerOptions& o) {
             {"config", config}};
   // Only when on: the runs from before the option resume as before.
   if (o.label_lookahead) p["label_lookahead"] = true;
+  if (o.fixed_strategy) p["fixed_strategy"] = true;
   if (o.retrain_learning_rate > 0.0) p["retrain_learning_rate"] = o.retrain_learning_rate;
   if (o.candidates > 1) {
     p["candidates"] = o.candidates;
@@ -246,6 +247,7 @@ Aggregate read_aggregate(const DaggerOptions& o) {
                     {"scenes_per_round", o.scenes},
                     {"closed_loop_config", closed_loop},
                     {"shards", json::array()}}}};
+  if (o.fixed_strategy) a.parameters["dagger"]["fixed_strategy"] = true;
   if (!fs::exists(fs::path(data_dir(o)) / data::kManifestName)) return a;
   data::detail::remove_stale_temporaries(data_dir(o));  // a killed round's shard
   const json old = data::detail::read_manifest(data_dir(o)).at("parameters");
@@ -265,15 +267,16 @@ void add_round(Aggregate& a, const DaggerOptions& o, int round, std::ostream* pr
   const planner::MlpMiqpPlanner learner(o.config, model,
                                         std::make_shared<expert::FastLaneChangeSolver>());
   fs::create_directories(data_dir(o));
-  const detail::CollectJob job{learner,
-                               o.config,
-                               o.scene_seed,
-                               (round - 1) * o.scenes,
-                               o.scenes,
-                               {o.stride, o.label_nodes, o.label_time_limit_s, o.every_scene,
-                                o.rollout == Rollout::Gated, o.past_takeover_s, o.label_lookahead},
-                               o.jobs,
-                               progress};
+  const detail::CollectJob job{
+      learner,
+      o.config,
+      o.scene_seed,
+      (round - 1) * o.scenes,
+      o.scenes,
+      {o.stride, o.label_nodes, o.label_time_limit_s, o.every_scene, o.rollout == Rollout::Gated,
+       o.past_takeover_s, o.label_lookahead, o.fixed_strategy},
+      o.jobs,
+      progress};
   const detail::RoundData got = detail::collect_round(job, data_dir(o), round - 1, a.count());
   a.shards.push_back(got.range);
   a.labelled.push_back(got.labelled);

@@ -36,10 +36,10 @@ ShardRange shard_range(long long shard, long long count, long long shard_size) {
 }
 
 PlanOutcome plan_outcome(const expert::ExpertPlanner& planner, const Scenario& scenario,
-                         double time_limit_s) {
+                         double time_limit_s, const expert::PlanHints& hints) {
   PlanOutcome out;
   try {
-    const expert::ExpertResult result = planner.plan(scenario, {time_limit_s});
+    const expert::ExpertResult result = planner.plan(scenario, {time_limit_s}, hints);
     Trajectory trajectory = planner.to_trajectory(result, scenario);
     out.status = std::string(expert::to_string(result.status));
     out.label = trajectory.label;

@@ -26,7 +26,8 @@ struct ShardRange {
 
 /// Plans one scenario; a solver that fails or throws gives a failure row.
 [[nodiscard]] PlanOutcome plan_outcome(const expert::ExpertPlanner& planner,
-                                       const Scenario& scenario, double time_limit_s);
+                                       const Scenario& scenario, double time_limit_s,
+                                       const expert::PlanHints& hints = {});
 
 /// Everything a worker needs to make shards; shared read-only by all threads.
 struct ShardMaker {

@@ -16,8 +16,8 @@ using expert::ExpertResult;
 using expert::Iterate;
 using expert::PlanStatus;
 
-// The path shifted forward by `by` nodes and cut or padded (the last node
-// coasting along its heading) to `steps` steps; the modes likewise.
+}  // namespace
+
 Iterate shifted(const Iterate& path, int by, int steps, double dt) {
   Iterate out;
   const int last_state = static_cast<int>(path.states.size()) - 1;
@@ -41,8 +41,6 @@ std::vector<int> shifted(const std::vector<int>& modes, int by, int steps) {
   for (int k = 1; k <= steps; ++k) out[k] = modes[std::min(k + by, last)];
   return out;
 }
-
-}  // namespace
 
 Config closed_loop_expert(Config config) {
   config.expert.monotone_lateral =

@@ -16,6 +16,13 @@ namespace lanechange::planner {
 /// states of every car, and the horizon the config's mode asks for.
 [[nodiscard]] Scenario scene_now(const Observation& observation, const Config& config);
 
+/// The path shifted forward by `by` nodes and cut or padded (the last node
+/// coasting along its heading) to `steps` steps: a plan made `by` steps ago,
+/// as a guess for one from now.
+[[nodiscard]] expert::Iterate shifted(const expert::Iterate& path, int by, int steps, double dt);
+/// The lane modes likewise (node 0 free: its state is given).
+[[nodiscard]] std::vector<int> shifted(const std::vector<int>& modes, int by, int steps);
+
 /// Where a re-planning session gets its plans: the exact expert, or
 /// predicted strategies finished by QPs. Called with the scene now, the
 /// step's time limit and the last plan shifted to now as hints.

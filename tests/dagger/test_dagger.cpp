@@ -96,6 +96,54 @@ TEST(Dagger, KeptNodesFollowTheVisitedStateOnTheRolloutsClock) {
   EXPECT_GT(b.ego[3].x, b.ego[0].x);
 }
 
+// With the strategy fixed, every well-posed label keeps the lane modes of
+// the expert's plan from the scene's start, shifted to its step. The learner
+// replays that plan's controls, so those modes stay feasible on its way.
+TEST(Dagger, FixedStrategyLabelsKeepTheExpertsLaneModes) {
+  const Config config = small_config();
+  const Scenario scene = testing::open_road_scenario();
+  const double dt = scene.horizon / scene.steps;
+  const planner::MlpMiqpPlanner planning = constant_learner(config, {0.0, 0.0});
+  const expert::ExpertResult start = planning.expert().plan(scene);
+  ASSERT_EQ(start.status, expert::PlanStatus::Converged);
+  const planner::MlpMiqpPlanner learner(
+      config, [](const Scenario&) { return static_cast<int>(Label::WellPosed); },
+      [&start](const planner::Observation& o) {
+        const auto k = std::min(static_cast<std::size_t>(o.step), start.path.controls.size() - 1);
+        return EgoControl{start.path.controls[k](0), start.path.controls[k](1)};
+      },
+      std::make_shared<expert::FastLaneChangeSolver>());
+  dagger::detail::Labelling labelling{4, 0, 60.0};
+  labelling.fixed_strategy = true;
+  const auto queries = dagger::detail::collect_scene(scene, learner, config, labelling);
+  int compared = 0;
+  for (const auto& q : queries) {
+    if (q.outcome.label != Label::WellPosed) continue;
+    const auto step = static_cast<std::size_t>(std::lround(q.outcome.trajectory.t[0] / dt));
+    const auto& lanes = q.outcome.lane_modes;
+    for (std::size_t k = 1; k < lanes.size() && k + step < start.occupancy.size(); ++k) {
+      ASSERT_TRUE(start.occupancy[k + step].has_value());
+      EXPECT_EQ(lanes[k], static_cast<int>(*start.occupancy[k + step])) << "step " << step;
+      ++compared;
+    }
+  }
+  EXPECT_GT(compared, 10);
+
+  // Driven straight on, the ego falls behind that plan's lane change and its
+  // modes no longer hold: the free search labels those states instead.
+  const planner::MlpMiqpPlanner straight = constant_learner(config, {0.0, 0.0});
+  const auto well_posed = [](const std::vector<dagger::detail::Query>& all) {
+    return std::count_if(all.begin(), all.end(),
+                         [](const auto& q) { return q.outcome.label == Label::WellPosed; });
+  };
+  const auto fixed = dagger::detail::collect_scene(scene, straight, config, labelling);
+  labelling.fixed_strategy = false;
+  const auto free = dagger::detail::collect_scene(scene, straight, config, labelling);
+  ASSERT_EQ(fixed.size(), free.size());
+  EXPECT_EQ(well_posed(fixed), well_posed(free));
+  EXPECT_GT(well_posed(free), 0);
+}
+
 // Gated (HG-DAgger), the learner is mlp-miqp: the labels are the bare
 // rollout's up to the take-over, plus the take-over's own state, and none
 // from the states the expert drives afterwards.

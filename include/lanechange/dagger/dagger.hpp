@@ -56,6 +56,11 @@ struct DaggerOptions {
   /// node) are labelled too, every stride-th; mlp-miqp's check rolls the
   /// network out there, so those are the states that decide a take-over.
   bool label_lookahead = false;
+  /// Label with the expert's lane strategy for the scene fixed: each state's
+  /// label is the plan with the modes of the expert's plan from the scene's
+  /// start (the free search where they leave no well-posed plan). The free
+  /// expert's first control jumps with its strategy between nearby states.
+  bool fixed_strategy = false;
   /// Each round's retrain starts from the last round's network and keeps
   /// round 0's standardizers, instead of fresh weights on refitted ones.
   bool fine_tune = false;
