@@ -213,6 +213,9 @@ RoundRow evaluate(const DaggerOptions& o, Scenes scenes, const std::string& plan
 
 // The aggregated data set: one shard per round, listed in the manifest's
 // parameters.dagger.shards with how many well-posed labels each holds.
+// The implicit noexcept move sees nlohmann::json's invariant check
+// (JSON_ASSERT) as a possible throw.
+// NOLINTNEXTLINE(bugprone-exception-escape)
 struct Aggregate {
   json parameters;
   std::vector<data::detail::ShardRange> shards;

@@ -34,6 +34,9 @@ struct ModelRequirements {
   std::optional<nlohmann::json> expert_config;  ///< the config the data came from
 };
 
+// The implicit noexcept move sees nlohmann::json's invariant check
+// (JSON_ASSERT) as a possible throw.
+// NOLINTNEXTLINE(bugprone-exception-escape)
 class Model {
  public:
   /// Reads dir, verifying the format, every file's checksum and the

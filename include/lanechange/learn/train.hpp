@@ -47,6 +47,9 @@ TrainReport train_models(const TrainOptions& options);
 /// was trained on keep its train/test split and, by default, its validation
 /// rows (early stopping); rows of any other data set all train. The data
 /// sets must share the base model's expert config.
+// The implicit noexcept move sees nlohmann::json's invariant check
+// (JSON_ASSERT) as a possible throw.
+// NOLINTNEXTLINE(bugprone-exception-escape)
 struct RetrainOptions {
   std::string base_model;
   std::vector<std::string> data_dirs;
