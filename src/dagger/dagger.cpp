@@ -7,6 +7,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -367,32 +368,34 @@ void retrain(const DaggerOptions& o, int round, const std::string& out,
 // scenes play no part in the choice.
 void select_retrain(const DaggerOptions& o, int round, std::vector<Candidate>& table,
                     std::ostream* progress) {
-  const std::string prefix = "round-" + std::to_string(round) + "-candidate-";
-  const std::size_t first = table.size();
-  std::size_t best = first;
+  const auto candidate_dir = [&](int j) {
+    return (fs::path(o.work_dir) /
+            ("round-" + std::to_string(round) + "-candidate-" + std::to_string(j)))
+        .string();
+  };
+  const auto first = static_cast<std::ptrdiff_t>(table.size());
   for (int j = 0; j < o.candidates; ++j) {
-    const std::string model = (fs::path(o.work_dir) / (prefix + std::to_string(j))).string();
     const auto offset = static_cast<std::uint64_t>(j);
-    if (!has_model(model)) retrain(o, round, model, offset);
+    if (!has_model(candidate_dir(j))) retrain(o, round, candidate_dir(j), offset);
     const RoundRow row =
-        evaluate(o, {o.select_count, o.select_seed}, "mlp-miqp", model,
+        evaluate(o, {o.select_count, o.select_seed}, "mlp-miqp", candidate_dir(j),
                  "select-" + std::to_string(round) + "-" + std::to_string(j), round, {}, progress);
     table.push_back({round, j, offset, row.takeovers_per_rollout, row.success_rate, false});
-    const Candidate& c = table.back();
-    const bool better = c.takeovers_per_rollout < table[best].takeovers_per_rollout ||
-                        (c.takeovers_per_rollout == table[best].takeovers_per_rollout &&
-                         c.success_rate > table[best].success_rate);
-    if (table.size() == first + 1 || better) best = table.size() - 1;
   }
-  table[best].chosen = true;
-  if (!has_model(model_dir(o, round))) {
-    publish_copy((fs::path(o.work_dir) / (prefix + std::to_string(table[best].candidate))).string(),
-                 model_dir(o, round));
-  }
+  // Fewest take-overs, then the higher success; the first of equals.
+  Candidate& best = *std::min_element(
+      table.begin() + first, table.end(), [](const Candidate& a, const Candidate& b) {
+        return a.takeovers_per_rollout < b.takeovers_per_rollout ||
+               (a.takeovers_per_rollout == b.takeovers_per_rollout &&
+                a.success_rate > b.success_rate);
+      });
+  best.chosen = true;
+  if (!has_model(model_dir(o, round)))
+    publish_copy(candidate_dir(best.candidate), model_dir(o, round));
   if (progress != nullptr) {
-    *progress << "dagger: round " << round << ": candidate " << table[best].candidate
+    *progress << "dagger: round " << round << ": candidate " << best.candidate
               << " chosen (take-overs per rollout on the selection scenes "
-              << table[best].takeovers_per_rollout << ")" << std::endl;
+              << best.takeovers_per_rollout << ")" << std::endl;
   }
 }
 
