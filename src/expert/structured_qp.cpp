@@ -10,6 +10,24 @@ namespace lanechange::expert {
 using StateMatrix = Eigen::Matrix<double, kQpStates, kQpStates>;
 using GainMatrix = Eigen::Matrix<double, kQpControls, kQpStates>;
 
+bool kinematic_form(const Eigen::Matrix<double, kQpStates, kQpStates>& A,
+                    const Eigen::Matrix<double, kQpStates, kQpControls>& B,
+                    KinematicDynamics& out) {
+  Eigen::Matrix<double, kQpStates, kQpStates> rest_a = A;
+  rest_a.block<2, 2>(0, 2).setZero();
+  Eigen::Matrix<double, kQpStates, kQpStates> identity_but_memory =
+      Eigen::Matrix<double, kQpStates, kQpStates>::Identity();
+  identity_but_memory(4, 4) = 0.0;
+  if (rest_a != identity_but_memory) return false;
+  Eigen::Matrix<double, kQpStates, kQpControls> rest_b = B;
+  rest_b.topRows<2>().setZero();
+  rest_b(2, 0) = rest_b(3, 1) = rest_b(4, 0) = 0.0;
+  if (!rest_b.isZero(0.0)) return false;
+  out = {A(0, 2), A(0, 3), A(1, 2), A(1, 3), B(0, 0), B(0, 1),
+         B(1, 0), B(1, 1), B(2, 0), B(3, 1), B(4, 0)};
+  return true;
+}
+
 void QpWorkspace::advance(int stages) { stages_since_solution_ += stages; }
 
 void QpWorkspace::carry_solution(const StructuredQp& qp) {
@@ -78,10 +96,13 @@ void QpWorkspace::setup(const StructuredQp& qp) {
     v->assign(stages, QpStageVector::Zero());
   hess_.assign(stages, QpStageMatrix::Zero());
   gain_.assign(stages, GainMatrix::Zero());
+  kinematic_.assign(stages, KinematicDynamics{});
+  is_kinematic_.assign(stages, 0);
   sbar_.assign(stages, GainMatrix::Zero());
   rbar_inverse_.assign(stages, Eigen::Matrix2d::Zero());
   costate_.assign(stages + 1, QpStateVector::Zero());
   feedforward_.assign(stages, Eigen::Vector2d::Zero());
+  unit_feedforward_.assign(stages, Eigen::Vector2d::Zero());
   if (initial_controls_.size() != static_cast<std::size_t>(stages)) {
     initial_controls_.assign(stages, Eigen::Vector2d::Zero());
   }
@@ -182,6 +203,11 @@ struct InteriorPointMethod {
   }
 
   void initialize() {
+    for (int k = 0; k < n; ++k) {
+      const QpStage& st = qp.stages[k];
+      ws.is_kinematic_[k] =
+          settings.kinematic_sparsity && kinematic_form(st.A, st.B, ws.kinematic_[k]) ? 1 : 0;
+    }
     ws.w_[0].head<kQpStates>() = qp.initial_state;
     ws.terminal_multiplier_ = 0.0;
     for (int k = 0; k <= n; ++k) {
@@ -189,8 +215,8 @@ struct InteriorPointMethod {
       if (k == n) ws.w_[k].tail<kQpControls>().setZero();
       if (k < n) {
         const QpStage& st = qp.stages[k];
-        ws.w_[k + 1].head<kQpStates>() =
-            st.A * ws.w_[k].head<kQpStates>() + st.B * ws.w_[k].tail<kQpControls>() + st.c;
+        ws.w_[k + 1].head<kQpStates>() = times_a(k, ws.w_[k].head<kQpStates>()) +
+                                         times_b(k, ws.w_[k].tail<kQpControls>()) + st.c;
       }
     }
     // A warm start takes the stages whose rows the last solution has
@@ -318,10 +344,9 @@ struct InteriorPointMethod {
     nu[n] = -ws.grad_base_[n].head<kQpStates>();
     double worst = 0.0;
     for (int k = n - 1; k >= 0; --k) {
-      const QpStage& st = qp.stages[k];
-      const Eigen::Vector2d r = ws.grad_base_[k].tail<kQpControls>() - st.B.transpose() * nu[k + 1];
+      const Eigen::Vector2d r = ws.grad_base_[k].tail<kQpControls>() - b_times(k, nu[k + 1]);
       worst = std::max(worst, r.cwiseAbs().maxCoeff());
-      nu[k] = -ws.grad_base_[k].head<kQpStates>() + st.A.transpose() * nu[k + 1];
+      nu[k] = -ws.grad_base_[k].head<kQpStates>() + a_times(k, nu[k + 1]);
     }
     return worst;
   }
@@ -360,12 +385,12 @@ struct InteriorPointMethod {
     double bound = lagrangian;
     for (int k = n - 1; k >= 0; --k) {
       const QpStage& st = qp.stages[k];
-      const Eigen::Vector2d slope = gradient[k].tail<kQpControls>() + st.B.transpose() * adjoint;
+      const Eigen::Vector2d slope = gradient[k].tail<kQpControls>() + b_times(k, adjoint);
       for (int c = 0; c < kQpControls; ++c) {
         bound += least_change(slope[c], st.control_curvature[c], ws.w_[k][kQpStates + c],
                               ws.control_lower_[k][c], ws.control_upper_[k][c]);
       }
-      adjoint = gradient[k].head<kQpStates>() + st.A.transpose() * adjoint;
+      adjoint = gradient[k].head<kQpStates>() + a_times(k, adjoint);
     }
     return std::isnan(bound) ? -kInfinityResidual : bound;
   }
@@ -444,6 +469,10 @@ struct InteriorPointMethod {
   }
 
   void stage_matrix(int k, const StateMatrix& P, QpStageMatrix& M) const {
+    if (ws.is_kinematic_[k] != 0) {
+      kinematic_stage_matrix(k, P, M);
+      return;
+    }
     const QpStage& st = qp.stages[k];
     const auto& H = ws.hess_[k];
     const Eigen::Matrix<double, kQpStates, kQpControls> PB = P * st.B;
@@ -456,6 +485,66 @@ struct InteriorPointMethod {
         M.topRightCorner<kQpControls, kQpStates>().transpose();
     M.bottomRightCorner<kQpStates, kQpStates>() =
         H.topLeftCorner<kQpStates, kQpStates>() + st.A.transpose() * PA;
+  }
+
+  // M of a kinematic stage, from the nonzeros alone (see KinematicDynamics).
+  void kinematic_stage_matrix(int k, const StateMatrix& P, QpStageMatrix& M) const {
+    const KinematicDynamics& d = ws.kinematic_[k];
+    const auto& H = ws.hess_[k];
+    Eigen::Matrix<double, kQpStates, kQpControls> PB;
+    PB.col(0) = d.x_a * P.col(0) + d.y_a * P.col(1) + d.v_a * P.col(2) + d.memory_a * P.col(4);
+    PB.col(1) = d.x_omega * P.col(0) + d.y_omega * P.col(1) + d.theta_omega * P.col(3);
+    StateMatrix PA;
+    PA.col(0) = P.col(0);
+    PA.col(1) = P.col(1);
+    PA.col(2) = P.col(2) + d.x_v * P.col(0) + d.y_v * P.col(1);
+    PA.col(3) = P.col(3) + d.x_theta * P.col(0) + d.y_theta * P.col(1);
+    PA.col(4).setZero();
+    for (int c = 0; c < kQpControls; ++c) {
+      M.block<kQpControls, 1>(0, c) =
+          H.block<kQpControls, 1>(kQpStates, kQpStates + c) + b_times(k, PB.col(c));
+      M.block<1, kQpStates>(c, kQpControls) =
+          H.block<1, kQpStates>(kQpStates + c, 0) + a_times(k, PB.col(c)).transpose();
+    }
+    M.bottomLeftCorner<kQpStates, kQpControls>() =
+        M.topRightCorner<kQpControls, kQpStates>().transpose();
+    for (int j = 0; j < kQpStates; ++j) {
+      M.block<kQpStates, 1>(kQpControls, kQpControls + j) =
+          H.block<kQpStates, 1>(0, j) + a_times(k, PA.col(j));
+    }
+  }
+
+  // Products with a stage's A and B, their transposes, sparse where the
+  // stage is kinematic.
+  [[nodiscard]] QpStateVector times_a(int k, const QpStateVector& v) const {
+    if (ws.is_kinematic_[k] == 0) return qp.stages[k].A * v;
+    const KinematicDynamics& d = ws.kinematic_[k];
+    QpStateVector out;
+    out << v[0] + d.x_v * v[2] + d.x_theta * v[3], v[1] + d.y_v * v[2] + d.y_theta * v[3], v[2],
+        v[3], 0.0;
+    return out;
+  }
+  [[nodiscard]] QpStateVector times_b(int k, const Eigen::Vector2d& u) const {
+    if (ws.is_kinematic_[k] == 0) return qp.stages[k].B * u;
+    const KinematicDynamics& d = ws.kinematic_[k];
+    QpStateVector out;
+    out << d.x_a * u[0] + d.x_omega * u[1], d.y_a * u[0] + d.y_omega * u[1], d.v_a * u[0],
+        d.theta_omega * u[1], d.memory_a * u[0];
+    return out;
+  }
+  [[nodiscard]] QpStateVector a_times(int k, const QpStateVector& v) const {
+    if (ws.is_kinematic_[k] == 0) return qp.stages[k].A.transpose() * v;
+    const KinematicDynamics& d = ws.kinematic_[k];
+    QpStateVector out;
+    out << v[0], v[1], v[2] + d.x_v * v[0] + d.y_v * v[1],
+        v[3] + d.x_theta * v[0] + d.y_theta * v[1], 0.0;
+    return out;
+  }
+  [[nodiscard]] Eigen::Vector2d b_times(int k, const QpStateVector& v) const {
+    if (ws.is_kinematic_[k] == 0) return qp.stages[k].B.transpose() * v;
+    const KinematicDynamics& d = ws.kinematic_[k];
+    return {d.x_a * v[0] + d.y_a * v[1] + d.v_a * v[2] + d.memory_a * v[4],
+            d.x_omega * v[0] + d.y_omega * v[1] + d.theta_omega * v[3]};
   }
 
   // The stage's gain from L11; returns L11^-1.
@@ -497,42 +586,55 @@ struct InteriorPointMethod {
   }
 
   // The LQ solve with the stored factorization: out = K^-1 (-gradient) on
-  // the space of trajectories with homogeneous dynamics and s_0 fixed.
-  void back_substitute(const std::vector<QpStageVector>& gradient,
-                       std::vector<QpStageVector>& out) {
+  // the space of trajectories with homogeneous dynamics and s_0 fixed. With
+  // `unit`, also the response to a unit force on the terminal equality,
+  // which the Schur complement of that one row needs: the two recursions are
+  // independent chains, and one loop over the stages overlaps them.
+  void back_substitute(const std::vector<QpStageVector>& gradient, std::vector<QpStageVector>& out,
+                       std::vector<QpStageVector>* unit = nullptr) {
     QpStateVector p = gradient[n].head<kQpStates>();
+    QpStateVector q = qp.terminal_g.head<kQpStates>();
     for (int k = n - 1; k >= 0; --k) {
-      const QpStage& st = qp.stages[k];
-      const Eigen::Vector2d rbar = gradient[k].tail<kQpControls>() + st.B.transpose() * p;
+      const Eigen::Vector2d rbar = gradient[k].tail<kQpControls>() + b_times(k, p);
       ws.feedforward_[k] = -ws.rbar_inverse_[k] * rbar;
-      p = gradient[k].head<kQpStates>() + st.A.transpose() * p +
+      p = gradient[k].head<kQpStates>() + a_times(k, p) +
           ws.sbar_[k].transpose() * ws.feedforward_[k];
+      if (unit != nullptr) {
+        ws.unit_feedforward_[k] = -ws.rbar_inverse_[k] * b_times(k, q);
+        q = a_times(k, q) + ws.sbar_[k].transpose() * ws.unit_feedforward_[k];
+      }
     }
     QpStateVector ds = QpStateVector::Zero();
+    QpStateVector dq = QpStateVector::Zero();
     for (int k = 0; k < n; ++k) {
       const Eigen::Vector2d du = ws.gain_[k] * ds + ws.feedforward_[k];
       out[k].head<kQpStates>() = ds;
       out[k].tail<kQpControls>() = du;
-      ds = qp.stages[k].A * ds + qp.stages[k].B * du;
+      ds = times_a(k, ds) + times_b(k, du);
+      if (unit != nullptr) {
+        const Eigen::Vector2d dv = ws.gain_[k] * dq + ws.unit_feedforward_[k];
+        (*unit)[k].head<kQpStates>() = dq;
+        (*unit)[k].tail<kQpControls>() = dv;
+        dq = times_a(k, dq) + times_b(k, dv);
+      }
     }
     out[n].head<kQpStates>() = ds;
     out[n].tail<kQpControls>().setZero();
-  }
-
-  // The response of the trajectory to a unit force on the terminal equality,
-  // which the Schur complement of that one row needs (same factorization).
-  void terminal_response() {
-    for (int k = 0; k <= n; ++k) ws.grad_[k].setZero();
-    ws.grad_[n] = qp.terminal_g;
-    back_substitute(ws.grad_, ws.dw_unit_);
+    if (unit != nullptr) {
+      (*unit)[n].head<kQpStates>() = dq;
+      (*unit)[n].tail<kQpControls>().setZero();
+    }
   }
 
   // The Newton step for the current gradient (newton_gradient), then the
   // eliminated row variables.
   // Returns the largest step in (0, 1] that keeps every positive variable
   // positive (in the same pass over the rows).
-  [[nodiscard]] double solve_step() {
-    back_substitute(ws.grad_, ws.dw_);
+  // `with_unit`: the first step after a factorization, which also finds the
+  // terminal equality's response.
+  [[nodiscard]] double solve_step(bool with_unit = false) {
+    back_substitute(ws.grad_, ws.dw_,
+                    with_unit && qp.has_terminal_equality ? &ws.dw_unit_ : nullptr);
     if (qp.has_terminal_equality) {
       // dw = dw_free + step * dw_unit, with step chosen so the equality holds after a full step.
       const double residual = qp.terminal_d - qp.terminal_g.dot(ws.w_[n]);
@@ -647,11 +749,10 @@ struct InteriorPointMethod {
       }
       row_weights();
       if (!factorize()) return result;
-      if (qp.has_terminal_equality) terminal_response();
       // Predictor: the affine-scaling direction.
       newton_gradient([&](int i) { return -ws.lambda_[i] * ws.t_[i]; },
                       [&](int i) { return -ws.lambda_soft_[i] * ws.sigma_[i]; });
-      const double alpha_affine = solve_step();
+      const double alpha_affine = solve_step(true);
       const double mu_affine = complementarity_after(alpha_affine);
       const double centering = std::pow(mu_affine / mu, 3);
       // Kept by swapping, not copying: the corrector's solve_step writes

@@ -235,3 +235,67 @@ TEST(StructuredQp, BothRiccatiFormsReachTheSameOptimum) {
     }
   }
 }
+
+namespace {
+
+// random_qp's problem with the lane-change dynamics' pattern (KinematicDynamics).
+lc::StructuredQp random_kinematic_qp(unsigned seed) {
+  lc::StructuredQp qp = random_qp(seed, {1.0, 1.0}, true);
+  std::mt19937 rng(seed + 1000);
+  std::uniform_real_distribution<double> coefficient(-0.3, 0.3);
+  for (lc::QpStage& st : qp.stages) {
+    st.A.setIdentity();
+    st.A(4, 4) = 0.0;
+    st.A.block<2, 2>(0, 2) << coefficient(rng), coefficient(rng), coefficient(rng),
+        coefficient(rng);
+    st.B.setZero();
+    st.B.topRows<2>() << coefficient(rng), coefficient(rng), coefficient(rng), coefficient(rng);
+    st.B(2, 0) = 0.1;
+    st.B(3, 1) = 0.1;
+    st.B(4, 0) = 1.0;
+  }
+  return qp;
+}
+
+}  // namespace
+
+TEST(StructuredQp, KinematicFormFindsTheLaneChangePatternOnly) {
+  lc::StructuredQp qp = random_kinematic_qp(3);
+  lc::KinematicDynamics d;
+  ASSERT_TRUE(lc::kinematic_form(qp.stages[0].A, qp.stages[0].B, d));
+  EXPECT_EQ(d.x_theta, qp.stages[0].A(0, 3));
+  EXPECT_EQ(d.y_omega, qp.stages[0].B(1, 1));
+  EXPECT_EQ(d.memory_a, 1.0);
+  Eigen::Matrix<double, 5, 5> A = qp.stages[0].A;
+  A(2, 3) = 1e-9;  // theta would drive v
+  EXPECT_FALSE(lc::kinematic_form(A, qp.stages[0].B, d));
+  Eigen::Matrix<double, 5, 2> B = qp.stages[0].B;
+  B(2, 1) = -1e-9;  // the yaw rate would drive v
+  EXPECT_FALSE(lc::kinematic_form(qp.stages[0].A, B, d));
+}
+
+TEST(StructuredQp, KinematicSparsityTakesTheDenseSteps) {
+  for (unsigned seed = 1; seed <= 20; ++seed) {
+    const lc::StructuredQp qp = random_kinematic_qp(seed);
+    lc::QpResult result[2];
+    std::vector<lc::QpStageVector> solution[2];
+    for (int sparse = 0; sparse < 2; ++sparse) {
+      lc::QpWorkspace ws;
+      ws.setup(qp);
+      lc::QpSettings settings;
+      settings.kinematic_sparsity = sparse == 1;
+      result[sparse] = lc::solve_structured_qp(qp, ws, settings);
+      solution[sparse] = ws.solution();
+    }
+    ASSERT_EQ(result[0].status, lc::QpStatus::Optimal) << "seed " << seed;
+    EXPECT_EQ(result[1].status, result[0].status) << "seed " << seed;
+    EXPECT_EQ(result[1].iterations, result[0].iterations) << "seed " << seed;
+    EXPECT_NEAR(result[1].objective, result[0].objective,
+                1e-9 * (1.0 + std::abs(result[0].objective)))
+        << "seed " << seed;
+    for (std::size_t k = 0; k < solution[0].size(); ++k) {
+      EXPECT_LT((solution[1][k] - solution[0][k]).cwiseAbs().maxCoeff(), 1e-7)
+          << "seed " << seed << ", stage " << k;
+    }
+  }
+}

@@ -101,6 +101,10 @@ struct QpSettings {
   /// size of the products that the rows' distances give this problem family
   /// (metres and m/s); 1 took a fifth more iterations, 1e4 no fewer.
   double initial_complementarity = 1e3;
+  /// Use the sparsity of the lane-change dynamics where a stage has it
+  /// (KinematicDynamics): the same steps in about a fifth of the dense
+  /// products' flops. Off: every stage as dense matrices (the tests compare).
+  bool kinematic_sparsity = true;
   /// Start from the workspace's last optimal solution (multipliers and
   /// slacks, each at least warm_start_floor off its bound) when this problem
   /// has its rows, stage for stage: a successive linearization's next round.
@@ -125,6 +129,21 @@ struct QpResult {
   double lower_bound = -std::numeric_limits<double>::infinity();  ///< the last proven one
 };
 
+/// The nonzeros of a stage's dynamics in the lane-change QPs: x and y move
+/// with v and theta, v and theta integrate the controls (a, omega), and the
+/// last state component remembers the acceleration. A = diag(1, 1, 1, 1, 0)
+/// plus the four x/y couplings; B has the seven entries below.
+struct KinematicDynamics {
+  double x_v = 0.0, x_theta = 0.0, y_v = 0.0, y_theta = 0.0;  ///< A(0..1, 2..3)
+  double x_a = 0.0, x_omega = 0.0, y_a = 0.0, y_omega = 0.0;  ///< B(0..1, 0..1)
+  double v_a = 0.0, theta_omega = 0.0, memory_a = 0.0;        ///< B(2, 0), B(3, 1), B(4, 0)
+};
+
+/// True, with the nonzeros in `out`, when A and B have exactly that pattern.
+[[nodiscard]] bool kinematic_form(const Eigen::Matrix<double, kQpStates, kQpStates>& A,
+                                  const Eigen::Matrix<double, kQpStates, kQpControls>& B,
+                                  KinematicDynamics& out);
+
 /// Per-stage vectors of the interior-point method; sized once for a problem shape.
 class QpWorkspace {
  public:
@@ -145,15 +164,17 @@ class QpWorkspace {
   /// Lines the last solution's rows up with `qp`'s stages (see advance).
   void carry_solution(const StructuredQp& qp);
   std::vector<int> row_offset_;
-  std::vector<int> single_index_;  ///< per row: its only nonzero, or -1
-  std::vector<bool> control_box_;  ///< per row: a hard bound on one control
+  std::vector<KinematicDynamics> kinematic_;  ///< per stage, when is_kinematic_
+  std::vector<char> is_kinematic_;            ///< per stage, found by each solve
+  std::vector<int> single_index_;             ///< per row: its only nonzero, or -1
+  std::vector<bool> control_box_;             ///< per row: a hard bound on one control
   std::vector<Eigen::Vector2d> control_lower_, control_upper_;  ///< per stage, from those rows
   std::vector<QpStageVector> w_, dw_, grad_, grad_base_, dw_unit_;
   double terminal_multiplier_ = 0.0;
   double terminal_step_ = 0.0;
   std::vector<QpStageMatrix> hess_;
   std::vector<Eigen::Matrix<double, kQpControls, kQpStates>> gain_;
-  std::vector<Eigen::Vector2d> feedforward_, initial_controls_;
+  std::vector<Eigen::Vector2d> feedforward_, unit_feedforward_, initial_controls_;
   std::vector<Eigen::Matrix2d> rbar_inverse_;
   std::vector<Eigen::Matrix<double, kQpControls, kQpStates>> sbar_;
   std::vector<Eigen::Matrix<double, kQpStates, 1>> costate_;
