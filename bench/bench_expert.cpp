@@ -58,6 +58,7 @@ const std::vector<lc::Scenario>& scenarios() {
     const lc::ScenarioSampler sampler(lc::Config{}, kSeed);
     std::vector<lc::Scenario> out;
     const int count = env_int("LANECHANGE_BENCH_SCENARIOS", 100);
+    out.reserve(static_cast<std::size_t>(std::max(count, 0)));
     for (int i = 0; i < count; ++i) out.push_back(sampler.sample(static_cast<std::uint64_t>(i)));
     return out;
   }();
@@ -86,7 +87,8 @@ const std::vector<ex::LaneChangeQp>& first_round_problems() {
 }
 
 struct Samples {
-  std::vector<double> fast_solve_ms, square_root_solve_ms, reference_solve_ms, plan_ms;
+  std::vector<double> fast_solve_ms, square_root_solve_ms, dense_solve_ms, reference_solve_ms,
+      plan_ms;
   std::vector<long> plan_allocations, plan_bytes;
 };
 Samples g_samples;
@@ -99,18 +101,27 @@ double thread_cpu_ms() {
   return static_cast<double>(t.tv_sec) * 1e3 + static_cast<double>(t.tv_nsec) * 1e-6;
 }
 
-// One solve per scenario, cycling through them. With `riccati`, the fast
-// solver's node QPs use that form; each solve still sets up a workspace of
-// its own, as one without a workspace does.
+// How the fast solver's node QPs take their steps, for a comparison in the same run.
+struct NodeQpSteps {
+  ex::RiccatiForm riccati = ex::RiccatiForm::Schur;
+  bool kinematic_sparsity = true;
+};
+
+// One solve per scenario, cycling through them. With `steps`, the fast
+// solver's node QPs take them; each solve still sets up a workspace of its
+// own, as one without a workspace does.
 void solve_all(benchmark::State& state, const ex::LaneChangeSolver& solver, int count,
-               std::vector<double>& samples, std::optional<ex::RiccatiForm> riccati = {}) {
+               std::vector<double>& samples, std::optional<NodeQpSteps> steps = {}) {
   const auto& problems = first_round_problems();
   std::size_t i = 0;
   for (auto _ : state) {
     const auto& qp = problems[i % static_cast<std::size_t>(count)];
     const double t0 = thread_cpu_ms();
     std::optional<ex::detail::FastWorkspace> workspace;
-    if (riccati) workspace.emplace().riccati = *riccati;
+    if (steps) {
+      workspace.emplace().riccati = steps->riccati;
+      workspace->kinematic_sparsity = steps->kinematic_sparsity;
+    }
     auto solution = solver.solve(qp, {}, {workspace ? &*workspace : nullptr, nullptr, nullptr});
     benchmark::DoNotOptimize(solution);
     samples.push_back(thread_cpu_ms() - t0);
@@ -118,22 +129,33 @@ void solve_all(benchmark::State& state, const ex::LaneChangeSolver& solver, int 
   }
 }
 
+int reference_scenarios() { return env_int("LANECHANGE_BENCH_REFERENCE_SCENARIOS", 100); }
+
+// The fast solver's runs cycle three times through the reference's problems.
+benchmark::IterationCount fast_solves() {
+  return static_cast<benchmark::IterationCount>(3) * reference_scenarios();
+}
+
 // On the same problems as the reference, so that the ratio compares like with like.
 void BM_FastSolve(benchmark::State& state) {
-  solve_all(state, ex::FastLaneChangeSolver{}, env_int("LANECHANGE_BENCH_REFERENCE_SCENARIOS", 100),
-            g_samples.fast_solve_ms);
+  solve_all(state, ex::FastLaneChangeSolver{}, reference_scenarios(), g_samples.fast_solve_ms);
 }
 
 // The same solves with every node QP's Riccati pass in square-root form
-// (the default before stop 25), for the ratio in the same run.
+// (the default before stop 25), and with dense products of every stage's A
+// and B (before stop 30), for the ratios in the same run.
 void BM_FastSolveSquareRoot(benchmark::State& state) {
-  solve_all(state, ex::FastLaneChangeSolver{}, env_int("LANECHANGE_BENCH_REFERENCE_SCENARIOS", 100),
-            g_samples.square_root_solve_ms, ex::RiccatiForm::SquareRoot);
+  solve_all(state, ex::FastLaneChangeSolver{}, reference_scenarios(),
+            g_samples.square_root_solve_ms, NodeQpSteps{ex::RiccatiForm::SquareRoot, true});
+}
+void BM_FastSolveDense(benchmark::State& state) {
+  solve_all(state, ex::FastLaneChangeSolver{}, reference_scenarios(), g_samples.dense_solve_ms,
+            NodeQpSteps{ex::RiccatiForm::Schur, false});
 }
 
 void BM_ReferenceSolve(benchmark::State& state) {
-  solve_all(state, ex::ReferenceLaneChangeSolver{},
-            env_int("LANECHANGE_BENCH_REFERENCE_SCENARIOS", 100), g_samples.reference_solve_ms);
+  solve_all(state, ex::ReferenceLaneChangeSolver{}, reference_scenarios(),
+            g_samples.reference_solve_ms);
 }
 
 void BM_FastPlan(benchmark::State& state) {
@@ -179,6 +201,13 @@ std::string cpu_model() {
   return "unknown";
 }
 
+// The fast solver with its node QPs' steps taken another way, against the defaults.
+void print_variant(const char* variant, const char* ratio_name, double variant_ms, double fast_ms) {
+  if (fast_ms <= 0 || variant_ms <= 0) return;
+  std::printf("fast with %s: %.3f ms; ratio %s (medians, this run): %.2f\n", variant, variant_ms,
+              ratio_name, variant_ms / fast_ms);
+}
+
 void print_summary() {
   char host[256] = {0};
   gethostname(host, sizeof host - 1);
@@ -203,13 +232,10 @@ void print_summary() {
       fast, g_samples.fast_solve_ms.size(), reference, g_samples.reference_solve_ms.size());
   if (fast > 0 && reference > 0)
     std::printf("ratio reference / fast (medians, this run): %.0f\n", reference / fast);
-  const double square_root = median(g_samples.square_root_solve_ms);
-  if (fast > 0 && square_root > 0) {
-    std::printf(
-        "fast with the square-root Riccati pass: %.3f ms; ratio square-root / schur (medians, "
-        "this run): %.2f\n",
-        square_root, square_root / fast);
-  }
+  print_variant("the square-root Riccati pass", "square-root / schur",
+                median(g_samples.square_root_solve_ms), fast);
+  print_variant("dense products of A and B", "dense / sparse", median(g_samples.dense_solve_ms),
+                fast);
   std::printf("median full plan (all rounds, fast, %s rule): %.3f ms over %zu plans\n",
               lc::Config{}.expert.lane_rule == lc::LaneRule::Footprint ? "footprint" : "either_or",
               median(g_samples.plan_ms), g_samples.plan_ms.size());
@@ -226,15 +252,10 @@ void print_summary() {
 
 }  // namespace
 
-BENCHMARK(BM_FastSolve)
-    ->Unit(benchmark::kMillisecond)
-    ->Iterations(3 * env_int("LANECHANGE_BENCH_REFERENCE_SCENARIOS", 100));
-BENCHMARK(BM_FastSolveSquareRoot)
-    ->Unit(benchmark::kMillisecond)
-    ->Iterations(3 * env_int("LANECHANGE_BENCH_REFERENCE_SCENARIOS", 100));
-BENCHMARK(BM_ReferenceSolve)
-    ->Unit(benchmark::kMillisecond)
-    ->Iterations(env_int("LANECHANGE_BENCH_REFERENCE_SCENARIOS", 100));
+BENCHMARK(BM_FastSolve)->Unit(benchmark::kMillisecond)->Iterations(fast_solves());
+BENCHMARK(BM_FastSolveSquareRoot)->Unit(benchmark::kMillisecond)->Iterations(fast_solves());
+BENCHMARK(BM_FastSolveDense)->Unit(benchmark::kMillisecond)->Iterations(fast_solves());
+BENCHMARK(BM_ReferenceSolve)->Unit(benchmark::kMillisecond)->Iterations(reference_scenarios());
 BENCHMARK(BM_FastPlan)->Unit(benchmark::kMillisecond)->Iterations(300);
 
 int main(int argc, char** argv) {

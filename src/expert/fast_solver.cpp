@@ -250,6 +250,7 @@ NodeOutcome solve_node_with(const LaneChangeQp& qp, const std::vector<int>& mode
   QpSettings settings;
   settings.warm_start = ws.warm_start_qp && precision == NodePrecision::Exact;
   settings.riccati = ws.riccati;
+  settings.kinematic_sparsity = ws.kinematic_sparsity;
   // The QP's objective leaves out LaneChangeQp::objective's constant.
   const double qp_cutoff = cutoff - qp.objective_constant();
   // A hair above the cutoff: a node this close is decided by its converged objective.

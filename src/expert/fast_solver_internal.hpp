@@ -25,7 +25,8 @@ struct FastWorkspace final : LaneChangeWorkspace {
   unsigned needed_bounds = 0;  // state components whose bounds this round's QPs carry
   bool warm_start_qp = false;  // start a node QP from the last one's multipliers (fixed modes)
   RiccatiForm riccati = RiccatiForm::Schur;  // of the node QPs (bench_expert compares the forms)
-  double rough_tolerance = 1e-3;             // where a NodePrecision::Rough QP may stop
+  bool kinematic_sparsity = true;  // of the node QPs (bench_expert compares with dense steps)
+  double rough_tolerance = 1e-3;   // where a NodePrecision::Rough QP may stop
   // Per node, bit m set when lane mode m can hold there at all: the states
   // the round's dynamics, bounds and controls can reach leave the others out.
   std::vector<unsigned> possible_modes;
