@@ -45,8 +45,13 @@ void QpWorkspace::carry_solution(const StructuredQp& qp) {
     // did (the last stage repeats past its end, as a shifted plan's does).
     // A stage's multipliers fit only row for row: a stage whose row count
     // changed starts centred.
-    std::vector<double> t(offset.back(), 0.0);
-    std::vector<double> lambda(t), sigma(t), lambda_soft(t);
+    // Members, so that a re-plan allocates nothing once they have grown:
+    // after the swaps below they hold the last solution's arrays.
+    std::vector<double>& t = carried_t_;
+    std::vector<double>& lambda = carried_lambda_;
+    std::vector<double>& sigma = carried_sigma_;
+    std::vector<double>& lambda_soft = carried_lambda_soft_;
+    for (auto* v : {&t, &lambda, &sigma, &lambda_soft}) v->assign(offset.back(), 0.0);
     for (int k = 0; k < stages; ++k) {
       const int from = std::min(k + stages_since_solution_, old_stages - 1);
       const int count = offset[k + 1] - offset[k];

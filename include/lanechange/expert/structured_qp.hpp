@@ -182,7 +182,8 @@ class QpWorkspace {
   bool has_solution_ = false;         ///< t_ .. lambda_soft_ hold an optimal solution of these rows
   std::vector<char> warm_stage_;      ///< per stage: its rows hold that solution's values
   std::vector<int> next_row_offset_;  ///< carry_solution's scratch
-  int stages_since_solution_ = 0;     ///< advance()'s stages since that solution
+  std::vector<double> carried_t_, carried_lambda_, carried_sigma_, carried_lambda_soft_;  ///< also
+  int stages_since_solution_ = 0;  ///< advance()'s stages since that solution
   std::vector<double> dt_, dlambda_, dsigma_, dlambda_soft_;
   std::vector<double> weight_, offset_, soft_q_;
   std::vector<double> dt_aff_, dlambda_aff_, dsigma_aff_, dlambda_soft_aff_;
