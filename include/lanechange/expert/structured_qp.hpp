@@ -167,6 +167,8 @@ class QpWorkspace {
   std::vector<KinematicDynamics> kinematic_;  ///< per stage, when is_kinematic_
   std::vector<char> is_kinematic_;            ///< per stage, found by each solve
   std::vector<int> single_index_;             ///< per row: its only nonzero, or -1
+  std::vector<int> row_stage_;                ///< per row: its stage
+  std::vector<const QpRow*> row_of_;          ///< per row: the row, in the problem being solved
   std::vector<bool> control_box_;             ///< per row: a hard bound on one control
   std::vector<Eigen::Vector2d> control_lower_, control_upper_;  ///< per stage, from those rows
   std::vector<QpStageVector> w_, dw_, grad_, grad_base_, dw_unit_;
