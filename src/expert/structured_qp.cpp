@@ -97,8 +97,7 @@ void QpWorkspace::setup(const StructuredQp& qp) {
     }
   }
   mark_control_boxes(qp);
-  row_stage_.assign(rows, 0);
-  row_of_.assign(rows, nullptr);
+  packed_.assign(rows, PackedRow{});
   for (auto* v : {&w_, &dw_, &grad_, &grad_base_, &dw_unit_})
     v->assign(stages, QpStageVector::Zero());
   hess_.assign(stages, QpStageMatrix::Zero());
@@ -201,12 +200,12 @@ struct InteriorPointMethod {
   int n = qp.steps();
   int total_rows = ws.row_offset_.back();
 
-  // One flat loop over the rows, their stages and addresses listed by
-  // initialize(): the loop per stage, with its row count, took 5% more per
-  // plan (bench_expert, stop 30).
+  // One flat loop over the rows as initialize() packed them
+  // (QpWorkspace::PackedRow): a loop per stage over the problem's 72-byte
+  // rows took about 10% more per plan (bench_expert, stop 30).
   template <class F>
   void for_each_row(F&& f) {
-    for (int i = 0; i < total_rows; ++i) f(ws.row_stage_[i], *ws.row_of_[i], i);
+    for (int i = 0; i < total_rows; ++i) f(ws.packed_[i].stage, ws.packed_[i], i);
   }
 
   void initialize() {
@@ -214,8 +213,9 @@ struct InteriorPointMethod {
       const auto& rows = qp.stages[k].rows;
       for (std::size_t j = 0; j < rows.size(); ++j) {
         const int i = ws.row_offset_[k] + static_cast<int>(j);
-        ws.row_stage_[i] = k;
-        ws.row_of_[i] = &rows[j];
+        const int single = ws.single_index_[i];
+        ws.packed_[i] = {&rows[j].g, rows[j].d, single >= 0 ? rows[j].g[single] : 0.0,
+                         single,     k,         rows[j].soft};
       }
     }
     for (int k = 0; k < n; ++k) {
@@ -242,17 +242,17 @@ struct InteriorPointMethod {
     double products = 0.0;
     int warm_rows = 0;
     if (warm) {
-      for_each_row([&](int k, const QpRow& row, int i) {
+      for_each_row([&](int k, const QpWorkspace::PackedRow& row, int i) {
         if (ws.warm_stage_[k] == 0) return;
-        warm_row(row, i, row.d - row_dot(row, i, ws.w_[k]));
+        warm_row(row, i, row.d - row_dot(row, ws.w_[k]));
         products += ws.lambda_[i] * ws.t_[i];
         ++warm_rows;
       });
     }
     const double mu0 = warm_rows > 0 ? products / warm_rows : settings.initial_complementarity;
-    for_each_row([&](int k, const QpRow& row, int i) {
+    for_each_row([&](int k, const QpWorkspace::PackedRow& row, int i) {
       if (warm && ws.warm_stage_[k] != 0) return;
-      centred_row(row, i, row.d - row_dot(row, i, ws.w_[k]), mu0);
+      centred_row(row, i, row.d - row_dot(row, ws.w_[k]), mu0);
     });
   }
 
@@ -263,7 +263,7 @@ struct InteriorPointMethod {
   // start with lambda = 1 everywhere and a violated soft row's t at 1e-2
   // took steps of 1e-4 for the first five to eight iterations, until the
   // products had evened out.
-  void centred_row(const QpRow& row, int i, double room, double mu0) {
+  void centred_row(const QpWorkspace::PackedRow& row, int i, double room, double mu0) {
     if (!row.soft) {
       ws.t_[i] = std::max(room, 1.0);
       ws.lambda_[i] = mu0 / ws.t_[i];
@@ -279,7 +279,7 @@ struct InteriorPointMethod {
   // The last solution's multipliers and slacks, each pushed at least
   // warm_start_floor off its bound: a point that close to the boundary
   // would block the first steps.
-  void warm_row(const QpRow& row, int i, double room) {
+  void warm_row(const QpWorkspace::PackedRow& row, int i, double room) {
     const double floor = settings.warm_start_floor;
     if (!row.soft) {
       ws.t_[i] = std::max(room, floor);
@@ -293,22 +293,20 @@ struct InteriorPointMethod {
   }
 
   // g' v for row i, cheap for the bound rows that have one nonzero.
-  [[nodiscard]] double row_dot(const QpRow& row, int i, const QpStageVector& v) const {
-    const int j = ws.single_index_[i];
-    return j >= 0 ? row.g[j] * v[j] : row.g.dot(v);
+  [[nodiscard]] static double row_dot(const QpWorkspace::PackedRow& row, const QpStageVector& v) {
+    return row.single >= 0 ? row.coefficient * v[row.single] : row.g->dot(v);
   }
 
-  void add_row_times(const QpRow& row, int i, double scale, QpStageVector& out) const {
-    const int j = ws.single_index_[i];
-    if (j >= 0) {
-      out[j] += row.g[j] * scale;
+  static void add_row_times(const QpWorkspace::PackedRow& row, double scale, QpStageVector& out) {
+    if (row.single >= 0) {
+      out[row.single] += row.coefficient * scale;
     } else {
-      out += row.g * scale;
+      out += *row.g * scale;
     }
   }
 
-  [[nodiscard]] double primal_residual(const QpRow& row, int k, int i) const {
-    const double r = row_dot(row, i, ws.w_[k]) + ws.t_[i] - row.d;
+  [[nodiscard]] double primal_residual(const QpWorkspace::PackedRow& row, int k, int i) const {
+    const double r = row_dot(row, ws.w_[k]) + ws.t_[i] - row.d;
     return row.soft ? r - ws.sigma_[i] : r;
   }
 
@@ -333,8 +331,8 @@ struct InteriorPointMethod {
         qp.has_terminal_equality ? std::abs(qp.terminal_g.dot(ws.w_[n]) - qp.terminal_d) : 0.0;
     double sum = 0.0;
     int count = 0;
-    for_each_row([&](int k, const QpRow& row, int i) {
-      add_row_times(row, i, ws.lambda_[i], ws.grad_base_[k]);
+    for_each_row([&](int k, const QpWorkspace::PackedRow& row, int i) {
+      add_row_times(row, ws.lambda_[i], ws.grad_base_[k]);
       sum += ws.lambda_[i] * ws.t_[i];
       ++count;
       ws.residual_[i] = primal_residual(row, k, i);
@@ -387,14 +385,14 @@ struct InteriorPointMethod {
     if (qp.has_terminal_equality) {
       lagrangian += ws.terminal_multiplier_ * (qp.terminal_g.dot(ws.w_[n]) - qp.terminal_d);
     }
-    for_each_row([&](int k, const QpRow& row, int i) {
+    for_each_row([&](int k, const QpWorkspace::PackedRow& row, int i) {
       if (ws.control_box_[i]) {
-        add_row_times(row, i, -ws.lambda_[i], gradient[k]);
+        add_row_times(row, -ws.lambda_[i], gradient[k]);
         return;
       }
       const double lambda = row.soft ? std::min(ws.lambda_[i], qp.softness_weight) : ws.lambda_[i];
-      if (lambda != ws.lambda_[i]) add_row_times(row, i, lambda - ws.lambda_[i], gradient[k]);
-      lagrangian += lambda * (row_dot(row, i, ws.w_[k]) - row.d);
+      if (lambda != ws.lambda_[i]) add_row_times(row, lambda - ws.lambda_[i], gradient[k]);
+      lagrangian += lambda * (row_dot(row, ws.w_[k]) - row.d);
     });
     QpStateVector adjoint = gradient[n].head<kQpStates>();
     double bound = lagrangian;
@@ -415,7 +413,7 @@ struct InteriorPointMethod {
   // were a large part of the per-row work.
   void row_weights() {
     for (int k = 0; k <= n; ++k) ws.hess_[k] = qp.stages[k].H;
-    for_each_row([&](int k, const QpRow& row, int i) {
+    for_each_row([&](int k, const QpWorkspace::PackedRow& row, int i) {
       ws.inverse_t_[i] = 1.0 / ws.t_[i];
       const double a = ws.lambda_[i] * ws.inverse_t_[i];
       ws.a_[i] = a;
@@ -427,11 +425,10 @@ struct InteriorPointMethod {
         weight = a * b * ws.inverse_a_plus_b_[i];
       }
       ws.weight_[i] = weight;
-      const int j = ws.single_index_[i];
-      if (j >= 0) {
-        ws.hess_[k](j, j) += weight * row.g[j] * row.g[j];
+      if (row.single >= 0) {
+        ws.hess_[k](row.single, row.single) += weight * row.coefficient * row.coefficient;
       } else {
-        ws.hess_[k].noalias() += weight * row.g * row.g.transpose();
+        ws.hess_[k].noalias() += weight * *row.g * row.g->transpose();
       }
     });
   }
@@ -441,7 +438,7 @@ struct InteriorPointMethod {
   template <class C4, class C5>
   void newton_gradient(C4&& c4_of, C5&& c5_of) {
     for (int k = 0; k <= n; ++k) ws.grad_[k] = ws.grad_base_[k];
-    for_each_row([&](int k, const QpRow& row, int i) {
+    for_each_row([&](int k, const QpWorkspace::PackedRow& row, int i) {
       const double r1 = ws.residual_[i];
       const double a = ws.a_[i];
       double e = c4_of(i) * ws.inverse_t_[i] + a * r1;
@@ -452,7 +449,7 @@ struct InteriorPointMethod {
         e -= a * q * ws.inverse_a_plus_b_[i];
       }
       ws.offset_[i] = e;
-      add_row_times(row, i, e, ws.grad_[k]);
+      add_row_times(row, e, ws.grad_[k]);
     });
   }
 
@@ -663,8 +660,8 @@ struct InteriorPointMethod {
     auto limit = [&alpha](double value, double change) {
       if (value + alpha * change < 0.0) alpha = std::min(alpha, -value / change);
     };
-    for_each_row([&](int k, const QpRow& row, int i) {
-      const double gd = row_dot(row, i, ws.dw_[k]);
+    for_each_row([&](int k, const QpWorkspace::PackedRow& row, int i) {
+      const double gd = row_dot(row, ws.dw_[k]);
       const double r1 = ws.residual_[i];
       ws.dlambda_[i] = ws.weight_[i] * gd + ws.offset_[i];
       if (row.soft) {
@@ -686,7 +683,7 @@ struct InteriorPointMethod {
   [[nodiscard]] double complementarity_after(double alpha) {
     double sum = 0.0;
     int count = 0;
-    for_each_row([&](int, const QpRow& row, int i) {
+    for_each_row([&](int, const QpWorkspace::PackedRow& row, int i) {
       sum += (ws.lambda_[i] + alpha * ws.dlambda_[i]) * (ws.t_[i] + alpha * ws.dt_[i]);
       ++count;
       if (row.soft) {
@@ -701,7 +698,7 @@ struct InteriorPointMethod {
   void take_step(double alpha) {
     for (int k = 0; k <= n; ++k) ws.w_[k] += alpha * ws.dw_[k];
     ws.terminal_multiplier_ += alpha * ws.terminal_step_;
-    for_each_row([&](int, const QpRow& row, int i) {
+    for_each_row([&](int, const QpWorkspace::PackedRow& row, int i) {
       ws.t_[i] += alpha * ws.dt_[i];
       ws.lambda_[i] += alpha * ws.dlambda_[i];
       if (row.soft) {
@@ -721,7 +718,7 @@ struct InteriorPointMethod {
 
   [[nodiscard]] double max_softness() {
     double worst = 0.0;
-    for_each_row([&](int, const QpRow& row, int i) {
+    for_each_row([&](int, const QpWorkspace::PackedRow& row, int i) {
       if (row.soft) worst = std::max(worst, ws.sigma_[i]);
     });
     return worst;

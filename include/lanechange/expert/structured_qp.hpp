@@ -167,9 +167,18 @@ class QpWorkspace {
   std::vector<KinematicDynamics> kinematic_;  ///< per stage, when is_kinematic_
   std::vector<char> is_kinematic_;            ///< per stage, found by each solve
   std::vector<int> single_index_;             ///< per row: its only nonzero, or -1
-  std::vector<int> row_stage_;                ///< per row: its stage
-  std::vector<const QpRow*> row_of_;          ///< per row: the row, in the problem being solved
-  std::vector<bool> control_box_;             ///< per row: a hard bound on one control
+  /// A row as the method's passes read it, packed per solve: most rows
+  /// bound one component, and their passes need no more than this.
+  struct PackedRow {
+    const QpStageVector* g = nullptr;  ///< the row's, in the problem being solved
+    double d = 0.0;
+    double coefficient = 0.0;  ///< g[single], where single >= 0
+    int single = -1;           ///< the only nonzero of g, or -1
+    int stage = 0;
+    bool soft = false;
+  };
+  std::vector<PackedRow> packed_;
+  std::vector<bool> control_box_;  ///< per row: a hard bound on one control
   std::vector<Eigen::Vector2d> control_lower_, control_upper_;  ///< per stage, from those rows
   std::vector<QpStageVector> w_, dw_, grad_, grad_base_, dw_unit_;
   double terminal_multiplier_ = 0.0;
