@@ -118,13 +118,43 @@ TEST(MlpMiqp, ANetworkThatDrivesWellIsNotOverruled) {
 
 // A check that ran out of time decided nothing, so the next step checks
 // again; a check that found no plan waits for the period.
+// The fast solver, except that a solve given less than a second reports its
+// time limit without an answer. A step budget of a picosecond still leaves
+// each round's MIQP a millisecond (ExpertPlanner), and a fast machine
+// finishes an easy scene's in that: this keeps the test off the clock.
+class OutOfTimeUnderASecond final : public expert::LaneChangeSolver {
+ public:
+  [[nodiscard]] std::string_view name() const override { return "out-of-time-under-a-second"; }
+  [[nodiscard]] std::unique_ptr<expert::LaneChangeWorkspace> make_workspace() const override {
+    return fast_.make_workspace();
+  }
+  [[nodiscard]] expert::LaneChangeSolution solve(const expert::LaneChangeQp& qp,
+                                                 const expert::MiqpSettings& settings,
+                                                 const expert::SolveHints& hints) const override {
+    if (settings.time_limit_s >= 1.0) return fast_.solve(qp, settings, hints);
+    expert::LaneChangeSolution out;
+    out.status = expert::MiqpStatus::TimeLimit;
+    out.message = "out of time";
+    return out;
+  }
+
+ private:
+  expert::FastLaneChangeSolver fast_;
+};
+
 TEST(MlpMiqp, ARefusalCheckCutShortByItsTimeLimitIsRepeatedAtOnce) {
   const Scenario s = testing::open_road_scenario();
   auto checks_in_first_steps = [&s](double budget_ms) {
     Config config = testing::untimed_config();
     config.closed_loop.step_budget_ms = budget_ms;
     int calls = 0;
-    const MlpMiqpPlanner p = refusing_counter(calls, config);
+    const MlpMiqpPlanner p(
+        config, [](const Scenario&) { return static_cast<int>(Label::Failure); },
+        [&calls](const Observation& o) {
+          ++calls;
+          return swerve_left(o);
+        },
+        std::make_shared<OutOfTimeUnderASecond>());
     const auto session = p.start(s);
     Observation o;
     o.scene = &s;
