@@ -569,13 +569,22 @@ struct InteriorPointMethod {
     return L11_inverse;
   }
 
+  // The control block's inverse in closed form, with the pivots the
+  // floored Cholesky factor would have (floor on each diagonal entry): one
+  // division on the stage's chain where the factor took two roots and three.
   bool schur_step(int k, const QpStageMatrix& M, StateMatrix& P) {
-    Eigen::Matrix2d L11;
-    if (!floored_cholesky<kQpControls>(M, kFirstPivotFloor, L11)) return false;
-    const Eigen::Matrix2d L11_inverse = store_gain(k, M, L11);
-    const Eigen::Matrix<double, kQpStates, kQpControls> L21 =
-        ws.sbar_[k].transpose() * L11_inverse.transpose();
-    P.noalias() = M.bottomRightCorner<kQpStates, kQpStates>() - L21 * L21.transpose();
+    const double a = M(0, 0) + kFirstPivotFloor * (1.0 + std::abs(M(0, 0)));
+    const double c = M(1, 1) + kFirstPivotFloor * (1.0 + std::abs(M(1, 1)));
+    const double b = M(1, 0);
+    const double determinant = a * c - b * b;
+    if (!(a > 0.0) || !(determinant > 0.0)) return false;
+    const double inverse = 1.0 / determinant;
+    Eigen::Matrix2d& r_inverse = ws.rbar_inverse_[k];
+    r_inverse << c * inverse, -b * inverse, -b * inverse, a * inverse;
+    ws.sbar_[k] = M.topRightCorner<kQpControls, kQpStates>();
+    ws.gain_[k].noalias() = -r_inverse * ws.sbar_[k];
+    P.noalias() =
+        M.bottomRightCorner<kQpStates, kQpStates>() + ws.sbar_[k].transpose() * ws.gain_[k];
     P = 0.5 * (P + P.transpose()).eval();
     return true;
   }
