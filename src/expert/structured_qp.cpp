@@ -455,9 +455,9 @@ struct InteriorPointMethod {
 
   // Riccati backward pass. Each stage matrix
   //   M = [R S; S' Q] + [B A]' P [B A]   (controls first)
-  // gives the gain from the Cholesky factor L11 of its control block, and
-  // the next P. The Schur form takes P = Q~ - L21 L21' (L21 = S~' L11^-T),
-  // two pivots per stage; the square-root form factors all of M and takes
+  // gives the gain K = -R~^-1 S~ from its control block, and the next P.
+  // The Schur form takes P = Q~ + S~' K, the Schur complement of that 2 x 2
+  // block (inverted in closed form); the square-root form factors all of M and takes
   // P = L22 L22', positive semidefinite by construction. The Schur form can
   // lose that to cancellation once the barrier weights grow large, which
   // shows as an indefinite control block further back: that iteration is

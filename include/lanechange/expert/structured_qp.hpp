@@ -66,7 +66,8 @@ struct StructuredQp {
 /// How the Riccati recursion forms the next cost-to-go matrix P from a
 /// stage's factored control block.
 enum class RiccatiForm {
-  /// P as the Schur complement of the control block: two pivots per stage.
+  /// P as the Schur complement of the 2 x 2 control block, inverted in
+  /// closed form with a Cholesky factor's two (floored) pivots.
   /// An iteration where rounding leaves a later control block indefinite
   /// (barrier weights of 1e12 and more) is factored again in SquareRoot form.
   Schur,
