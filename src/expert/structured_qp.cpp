@@ -292,7 +292,7 @@ struct InteriorPointMethod {
     ws.t_[i] = std::max(room + ws.sigma_[i], floor);
   }
 
-  // g' v for row i, cheap for the bound rows that have one nonzero.
+  // g' v for a row, cheap for the bound rows that have one nonzero.
   [[nodiscard]] static double row_dot(const QpWorkspace::PackedRow& row, const QpStageVector& v) {
     return row.single >= 0 ? row.coefficient * v[row.single] : row.g->dot(v);
   }
