@@ -23,6 +23,8 @@ void validate_closed_loop(const ClosedLoopSettings& c) {
           "settled_heading and settled_offset must be positive");
   require(c.keeper_lateral_gain > 0 && c.keeper_heading_gain > 0, "closed_loop",
           "the lane keeper's gains must be positive");
+  require(c.keeper_rear_horizon >= 0 && std::isfinite(c.keeper_rear_horizon),
+          "closed_loop.keeper_rear_horizon", "must be finite and not negative");
   require(c.lookahead >= 0, "closed_loop.lookahead", "must not be negative");
   require(c.lookahead_tolerance >= 0, "closed_loop.lookahead_tolerance", "must not be negative");
   require(c.refusal_check_period >= 0, "closed_loop.refusal_check_period", "must not be negative");

@@ -48,6 +48,7 @@ void visit_fields(V& v, S& s) requires std::same_as<std::remove_const_t<S>, Clos
   v("settled_offset", s.settled_offset);
   v("keeper_lateral_gain", s.keeper_lateral_gain);
   v("keeper_heading_gain", s.keeper_heading_gain);
+  v("keeper_rear_horizon", s.keeper_rear_horizon);
   v("lookahead", s.lookahead);
   v("lookahead_tolerance", s.lookahead_tolerance);
   v("refusal_check_period", s.refusal_check_period);

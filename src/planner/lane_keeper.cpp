@@ -18,7 +18,8 @@ std::string_view to_string(ActStatus status) {
 }
 
 EgoControl LaneKeeper::control(const EgoState& ego, double lane_center,
-                               const std::optional<CarAhead>& ahead) const {
+                               const std::optional<LaneCar>& ahead,
+                               const std::optional<LaneCar>& behind) const {
   const ClosedLoopSettings& c = config_.closed_loop;
   // The traffic's own IDM, so the ego follows as the other cars do; its
   // desired speed is the ego's speed limit at most.
@@ -34,6 +35,7 @@ EgoControl LaneKeeper::control(const EgoState& ego, double lane_center,
   }
   EgoControl out;
   out.a = idm_acceleration(idm, speed, gap, ahead_speed);
+  if (behind) out.a = std::max(out.a, keep_up(ego, gap, ahead_speed, *behind));
   // Steer along a heading that closes the offset: a second-order lateral
   // response, damped for the speeds of the scenarios (docs/closed_loop.md).
   constexpr double kMaxHeading = 0.15;  // rad: a calm return, never a swerve
@@ -43,16 +45,61 @@ EgoControl LaneKeeper::control(const EgoState& ego, double lane_center,
   return out;
 }
 
-std::optional<CarAhead> car_ahead(const Observation& o, bool target_lane) {
+// The other cars ignore the ego: a faster one behind drives into it unless
+// the ego gets out of its way. Against one that would close to the gap IDM
+// would keep behind the ego (s0 + v T) within keeper_rear_horizon: the
+// constant acceleration that matches its speed before the gap closes to s0
+// (recomputed each step, so it corrects itself), up to the ego's bound. The
+// car ahead caps it through IDM's interaction term (with no free-road
+// limit), so the ego is never pushed into that car.
+double LaneKeeper::keep_up(const EgoState& ego, double gap_ahead, double ahead_speed,
+                           const LaneCar& behind) const {
+  constexpr double kNone = -std::numeric_limits<double>::infinity();
+  const double horizon = config_.closed_loop.keeper_rear_horizon;
+  const double speed = std::max(0.0, ego.v * std::cos(ego.theta));
+  const double closing = behind.state.v - speed;
+  if (horizon <= 0.0 || closing <= 0.0 || behind.state.x >= ego.x) return kNone;
+  const IdmParameters& idm = config_.idm;
+  const double gap = ego.x - behind.state.x - 0.5 * (config_.vehicle.length + behind.length);
+  if (gap - closing * horizon >= idm.min_gap + behind.state.v * idm.time_headway) return kNone;
+  // The speeds are to match with a metre more than s0 left. Within half a
+  // metre of that, the constant acceleration would ask for the ego's full
+  // bound over the last cm, so the rest of the speed is matched in a second.
+  constexpr double kAimBeyondMinGap = 1.0;  // m
+  constexpr double kLeastRoom = 0.5;        // m
+  constexpr double kMatchTime = 1.0;        // s
+  const double room = gap - idm.min_gap - kAimBeyondMinGap;
+  const double strongest = std::max(idm.max_accel, config_.limits.a.hi);
+  const double needed = std::min(
+      room > kLeastRoom ? closing * closing / (2.0 * room) : closing / kMatchTime, strongest);
+  IdmParameters ahead_allows = idm;
+  ahead_allows.desired_speed = std::numeric_limits<double>::infinity();
+  ahead_allows.max_accel = std::max(needed, idm.max_accel);
+  return std::min(needed, idm_acceleration(ahead_allows, speed, gap_ahead, ahead_speed));
+}
+
+std::optional<LaneCar> car_ahead(const Observation& o, bool target_lane) {
   const auto ahead = [&o](Car car) {
-    return CarAhead{car, o.car(car), o.scene->size_of(car).length};
+    return LaneCar{car, o.car(car), o.scene->size_of(car).length};
   };
   if (!target_lane) return ahead(Car::Leader);
   // In the target lane the follower may be ahead once the ego fell behind it.
-  std::optional<CarAhead> best;
+  std::optional<LaneCar> best;
   for (const Car car : {Car::Follower, Car::Target}) {
     const CarState& c = o.car(car);
     if (c.x > o.ego.x && (!best || c.x < best->state.x)) best = ahead(car);
+  }
+  return best;
+}
+
+std::optional<LaneCar> car_behind(const Observation& o, bool target_lane) {
+  if (!target_lane) return std::nullopt;
+  std::optional<LaneCar> best;
+  for (const Car car : {Car::Follower, Car::Target}) {
+    const CarState& c = o.car(car);
+    if (c.x <= o.ego.x && (!best || c.x > best->state.x)) {
+      best = LaneCar{car, c, o.scene->size_of(car).length};
+    }
   }
   return best;
 }
@@ -94,7 +141,8 @@ EgoControl fallback_control(const LaneKeeper& keeper, const Observation& o) {
   const double w = o.scene->lane_width;
   const bool target_lane = fallback_in_target_lane(o);
   const double center = target_lane ? w : 0.0;
-  EgoControl u = keeper.control(o.ego, center, car_ahead(o, target_lane));
+  EgoControl u =
+      keeper.control(o.ego, center, car_ahead(o, target_lane), car_behind(o, target_lane));
   // Until its body has left the other lane, the ego also follows the car
   // ahead there: turning away from a car does not stop it closing in.
   const double half_body = o.scene->vehicle.width / 2.0;

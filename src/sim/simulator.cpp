@@ -63,7 +63,8 @@ class Loop {
 
   EgoControl keep_target_lane(const Observation& o, StepRecord& record) const {
     record.lane_keeping = true;
-    return keeper_.control(o.ego, scene_.lane_width, planner::car_ahead(o, true));
+    return keeper_.control(o.ego, scene_.lane_width, planner::car_ahead(o, true),
+                           planner::car_behind(o, true));
   }
 
   // The planner's answer, timed; a throw or an overrun hands the step to the

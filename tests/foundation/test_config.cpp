@@ -106,6 +106,8 @@ TEST(Config, RejectsUnknownKeysAndBadValuesByName) {
   EXPECT_EQ(field_of(R"({"expert": {"trust_rounds": 0}})"), "expert.trust_rounds");
   EXPECT_EQ(field_of(R"({"preset": "nobody"})"), "preset");
   EXPECT_EQ(field_of(R"({"traffic_max_speed": 0})"), "traffic_max_speed");
+  EXPECT_EQ(field_of(R"({"closed_loop": {"keeper_rear_horizon": -1}})"),
+            "closed_loop.keeper_rear_horizon");
   EXPECT_EQ(field_of(R"({"traffic_max_speed": "none"})"), "traffic_max_speed");
   EXPECT_EQ(field_of(R"({"idm": {"max_accel": "fast"}})"), "idm.max_accel");
   EXPECT_EQ(field_of(R"({"expert": {"cycle_tolerance": -1e-3}})"), "expert.cycle_tolerance");

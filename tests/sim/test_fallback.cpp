@@ -1,7 +1,11 @@
 // The fallback's choice of lane: over the line it keeps to the target lane,
-// unless a cut-in went wrong there while its own lane is clear.
+// unless a cut-in went wrong there while its own lane is clear. And the lane
+// keeper's speed, between the car ahead and a faster one behind.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
+#include "lanechange/ego.hpp"
 #include "lanechange/planner/planner.hpp"
 #include "test_helpers.hpp"
 
@@ -55,6 +59,82 @@ TEST(Fallback, BrakesForTheCarAheadInTheLaneItIsLeaving) {
   EXPECT_LT(u.a, -1.0);  // the leader is far ahead; the follower is not
   // Once its body has left the target lane, only its own lane counts.
   EXPECT_GT(planner::fallback_control(keeper, over_the_line(scene, 0.0)).a, 0.0);
+}
+
+// In the target lane, a constant-speed car 6 m/s faster 15 m behind the ego,
+// and the next car far ahead at that speed too.
+Scenario pushed_from_behind() {
+  Scenario scene = testing::open_road_scenario();
+  scene.ego.y = scene.lane_width;
+  scene.follower = {-15.0 - scene.vehicle.length, 14.0, 0.0};
+  scene.target = {120.0, 14.0, 0.0};
+  return scene;
+}
+
+planner::Observation in_the_target_lane(const Scenario& scene) {
+  return over_the_line(scene, scene.lane_width);
+}
+
+// The smallest bumper gap to the car behind over `seconds` of the keeper in
+// the target lane, every car keeping its speed (as the traffic models'
+// constant-speed cars ignore the ego).
+double closest_gap_behind(const Scenario& scene, const Config& config, double seconds) {
+  const planner::LaneKeeper keeper(config);
+  planner::Observation o = in_the_target_lane(scene);
+  constexpr double kDt = 0.1;
+  double closest = std::numeric_limits<double>::infinity();
+  for (double t = 0.0; t < seconds; t += kDt) {
+    EgoControl u = keeper.control(o.ego, scene.lane_width, planner::car_ahead(o, true),
+                                  planner::car_behind(o, true));
+    planner::clip_to_limits(u, o.ego, config.limits, kDt);
+    o.ego = step_exact(o.ego, u, kDt);
+    for (CarState& car : o.cars) car.x += car.v * kDt;
+    const CarState& behind = o.cars[static_cast<std::size_t>(Car::Follower)];
+    closest = std::min(closest, o.ego.x - behind.x - scene.vehicle.length);
+  }
+  return closest;
+}
+
+TEST(LaneKeeper, KeepsUpWithAFasterCarClosingInFromBehind) {
+  const Scenario scene = pushed_from_behind();
+  Config config = testing::untimed_config();
+  const planner::LaneKeeper keeper(config);
+  const auto o = in_the_target_lane(scene);
+  const EgoControl ahead_only = keeper.control(o.ego, scene.lane_width, std::nullopt);
+  const EgoControl with_behind =
+      keeper.control(o.ego, scene.lane_width, std::nullopt, planner::car_behind(o, true));
+  EXPECT_GT(with_behind.a, ahead_only.a + 0.5);
+  EXPECT_GT(closest_gap_behind(scene, config, 15.0), config.idm.min_gap);  // bumper to bumper
+  // The keeper of stop 30 and before, which watched the car ahead only, is
+  // driven into.
+  config.closed_loop.keeper_rear_horizon = 0.0;
+  EXPECT_LT(closest_gap_behind(scene, config, 15.0), 0.0);
+}
+
+TEST(LaneKeeper, TheCarAheadStillLimitsItsSpeedWhenACarBehindPushes) {
+  Scenario scene = pushed_from_behind();
+  scene.target = {12.0, 6.0, 0.0};  // a slower car close ahead in the target lane
+  const planner::LaneKeeper keeper(testing::untimed_config());
+  const auto o = in_the_target_lane(scene);
+  const EgoControl u = keeper.control(o.ego, scene.lane_width, planner::car_ahead(o, true),
+                                      planner::car_behind(o, true));
+  EXPECT_LT(u.a, 0.0);
+}
+
+TEST(LaneKeeper, IgnoresASlowerOrDistantCarBehind) {
+  const Config config = testing::untimed_config();
+  const planner::LaneKeeper keeper(config);
+  for (const CarState behind : {CarState{-15.0, 7.0, 0.0}, CarState{-200.0, 14.0, 0.0}}) {
+    Scenario scene = pushed_from_behind();
+    scene.follower = behind;
+    const auto o = in_the_target_lane(scene);
+    const EgoControl ahead_only = keeper.control(o.ego, scene.lane_width, std::nullopt);
+    const EgoControl with_behind =
+        keeper.control(o.ego, scene.lane_width, std::nullopt, planner::car_behind(o, true));
+    EXPECT_EQ(with_behind.a, ahead_only.a) << "car behind at " << behind.x;
+  }
+  // In the ego lane there is no car behind to watch.
+  EXPECT_FALSE(planner::car_behind(in_the_target_lane(pushed_from_behind()), false));
 }
 
 }  // namespace

@@ -61,31 +61,41 @@ class ClosedLoopPlanner {
   [[nodiscard]] virtual std::unique_ptr<PlannerSession> start(const Scenario& scene) const = 0;
 };
 
-/// The lane keeper: follows the car ahead in its lane by IDM and steers to
-/// the lane centre. It is the fallback of every planner (in the ego lane,
-/// behind the leader) and drives on once a lane change is over (in the
-/// target lane, behind the target). Pure and const.
-/// The car a lane keeper follows, with its length for the bumper gap.
-struct CarAhead {
+/// A car of the lane keeper's lane, with its length for the bumper gap.
+struct LaneCar {
   Car car = Car::Leader;
   CarState state;
   double length = 0.0;
 };
 
+/// The lane keeper: follows the car ahead in its lane by IDM, keeps up with a
+/// faster car closing in from behind (closed_loop.keeper_rear_horizon), and
+/// steers to the lane centre. It is the fallback of every planner (in the
+/// ego lane, behind the leader) and drives on once a lane change is over (in
+/// the target lane, behind the target). Pure and const.
 class LaneKeeper {
  public:
   explicit LaneKeeper(const Config& config) : config_(config) {}
-  /// The control that keeps `lane_center`, behind `ahead` (none: free road).
+  /// The control that keeps `lane_center`, behind `ahead` (none: free road)
+  /// and ahead of `behind` (none: no car behind).
   [[nodiscard]] EgoControl control(const EgoState& ego, double lane_center,
-                                   const std::optional<CarAhead>& ahead) const;
+                                   const std::optional<LaneCar>& ahead,
+                                   const std::optional<LaneCar>& behind = std::nullopt) const;
 
  private:
+  [[nodiscard]] double keep_up(const EgoState& ego, double gap_ahead, double ahead_speed,
+                               const LaneCar& behind) const;
   Config config_;
 };
 
 /// The car ahead of the ego in a lane: the leader in the ego lane, the
 /// target in the target lane (the follower once the ego is behind it).
-[[nodiscard]] std::optional<CarAhead> car_ahead(const Observation& observation, bool target_lane);
+[[nodiscard]] std::optional<LaneCar> car_ahead(const Observation& observation, bool target_lane);
+
+/// The nearest car behind the ego in the target lane (the follower, or the
+/// target once the ego has passed it); none in the ego lane, where the
+/// scenario has no car behind.
+[[nodiscard]] std::optional<LaneCar> car_behind(const Observation& observation, bool target_lane);
 
 /// Whether the fallback keeps to the target lane: once the ego's centre is
 /// over the line (turning back from there is the riskier move), unless the
