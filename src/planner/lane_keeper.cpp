@@ -64,14 +64,20 @@ double LaneKeeper::keep_up(const EgoState& ego, double gap_ahead, double ahead_s
   if (gap - closing * horizon >= idm.min_gap + behind.state.v * idm.time_headway) return kNone;
   // The speeds are to match with a metre more than s0 left. Within half a
   // metre of that, the constant acceleration would ask for the ego's full
-  // bound over the last cm, so the rest of the speed is matched in a second.
+  // bound over the last cm, so the rest of the speed is matched in a second,
+  // or with half a metre left where the car is already that close (a cut-in).
   constexpr double kAimBeyondMinGap = 1.0;  // m
   constexpr double kLeastRoom = 0.5;        // m
   constexpr double kMatchTime = 1.0;        // s
+  constexpr double kContact = 0.1;          // m
   const double room = gap - idm.min_gap - kAimBeyondMinGap;
   const double strongest = std::max(idm.max_accel, config_.limits.a.hi);
-  const double needed = std::min(
-      room > kLeastRoom ? closing * closing / (2.0 * room) : closing / kMatchTime, strongest);
+  const double needed =
+      std::min(room > kLeastRoom
+                   ? closing * closing / (2.0 * room)
+                   : std::max(closing / kMatchTime,
+                              closing * closing / (2.0 * std::max(gap - kLeastRoom, kContact))),
+               strongest);
   IdmParameters ahead_allows = idm;
   ahead_allows.desired_speed = std::numeric_limits<double>::infinity();
   ahead_allows.max_accel = std::max(needed, idm.max_accel);

@@ -111,6 +111,17 @@ TEST(LaneKeeper, KeepsUpWithAFasterCarClosingInFromBehind) {
   EXPECT_LT(closest_gap_behind(scene, config, 15.0), 0.0);
 }
 
+// Cut in 1.5 m in front of a car 3 m/s faster: it matches the speed before
+// contact, where a second's match would not.
+TEST(LaneKeeper, OutrunsACarRightBehindItBeforeContact) {
+  Scenario scene = pushed_from_behind();
+  scene.follower = {-1.5 - scene.vehicle.length, scene.ego.v + 3.0, 0.0};
+  Config config = testing::untimed_config();
+  EXPECT_GT(closest_gap_behind(scene, config, 5.0), 0.0);
+  config.closed_loop.keeper_rear_horizon = 0.0;
+  EXPECT_LT(closest_gap_behind(scene, config, 5.0), 0.0);
+}
+
 TEST(LaneKeeper, TheCarAheadStillLimitsItsSpeedWhenACarBehindPushes) {
   Scenario scene = pushed_from_behind();
   scene.target = {12.0, 6.0, 0.0};  // a slower car close ahead in the target lane
