@@ -189,9 +189,9 @@ struct ClosedLoopSettings {
   double keeper_lateral_gain = 0.08;  ///< rad per m of offset from the lane centre (lane keeper)
   double keeper_heading_gain = 1.2;   ///< 1/s: yaw rate per rad of heading error
   /// s: the lane keeper also keeps up with a faster car behind it in its lane
-  /// that would close to the expert's safe distance within this time (the
-  /// other cars ignore the ego), as far as the car ahead and the ego's limits
-  /// allow (docs/closed_loop.md); 0: the car ahead alone, as until stop 31.
+  /// that would come within IDM's gap (s0 + v T) within this time (the other
+  /// cars ignore the ego), as far as the car ahead and the ego's limits allow
+  /// (docs/closed_loop.md); 0: the car ahead alone, as until stop 31.
   double keeper_rear_horizon = 5.0;
   /// s the hierarchical planner checks its policy ahead. 2 s, not the issue's
   /// 1 s: with 1 s the take-over came when the expert could no longer finish

@@ -35,7 +35,7 @@ EgoControl LaneKeeper::control(const EgoState& ego, double lane_center,
   }
   EgoControl out;
   out.a = idm_acceleration(idm, speed, gap, ahead_speed);
-  if (behind) out.a = std::max(out.a, keep_up(ego, gap, ahead_speed, *behind));
+  if (behind) out.a = std::max(out.a, keep_up(ego.x, speed, gap, ahead_speed, *behind));
   // Steer along a heading that closes the offset: a second-order lateral
   // response, damped for the speeds of the scenarios (docs/closed_loop.md).
   constexpr double kMaxHeading = 0.15;  // rad: a calm return, never a swerve
@@ -52,15 +52,14 @@ EgoControl LaneKeeper::control(const EgoState& ego, double lane_center,
 // (recomputed each step, so it corrects itself), up to the ego's bound. The
 // car ahead caps it through IDM's interaction term (with no free-road
 // limit), so the ego is never pushed into that car.
-double LaneKeeper::keep_up(const EgoState& ego, double gap_ahead, double ahead_speed,
+double LaneKeeper::keep_up(double ego_x, double speed, double gap_ahead, double ahead_speed,
                            const LaneCar& behind) const {
   constexpr double kNone = -std::numeric_limits<double>::infinity();
   const double horizon = config_.closed_loop.keeper_rear_horizon;
-  const double speed = std::max(0.0, ego.v * std::cos(ego.theta));
   const double closing = behind.state.v - speed;
-  if (horizon <= 0.0 || closing <= 0.0 || behind.state.x >= ego.x) return kNone;
+  if (horizon <= 0.0 || closing <= 0.0 || behind.state.x >= ego_x) return kNone;
   const IdmParameters& idm = config_.idm;
-  const double gap = ego.x - behind.state.x - 0.5 * (config_.vehicle.length + behind.length);
+  const double gap = ego_x - behind.state.x - 0.5 * (config_.vehicle.length + behind.length);
   if (gap - closing * horizon >= idm.min_gap + behind.state.v * idm.time_headway) return kNone;
   // The speeds are to match with a metre more than s0 left. Within half a
   // metre of that, the constant acceleration would ask for the ego's full
@@ -84,16 +83,21 @@ double LaneKeeper::keep_up(const EgoState& ego, double gap_ahead, double ahead_s
   return std::min(needed, idm_acceleration(ahead_allows, speed, gap_ahead, ahead_speed));
 }
 
+namespace {
+
+LaneCar lane_car(const Observation& o, Car car) {
+  return LaneCar{car, o.car(car), o.scene->size_of(car).length};
+}
+
+}  // namespace
+
 std::optional<LaneCar> car_ahead(const Observation& o, bool target_lane) {
-  const auto ahead = [&o](Car car) {
-    return LaneCar{car, o.car(car), o.scene->size_of(car).length};
-  };
-  if (!target_lane) return ahead(Car::Leader);
+  if (!target_lane) return lane_car(o, Car::Leader);
   // In the target lane the follower may be ahead once the ego fell behind it.
   std::optional<LaneCar> best;
   for (const Car car : {Car::Follower, Car::Target}) {
     const CarState& c = o.car(car);
-    if (c.x > o.ego.x && (!best || c.x < best->state.x)) best = ahead(car);
+    if (c.x > o.ego.x && (!best || c.x < best->state.x)) best = lane_car(o, car);
   }
   return best;
 }
@@ -103,9 +107,7 @@ std::optional<LaneCar> car_behind(const Observation& o, bool target_lane) {
   std::optional<LaneCar> best;
   for (const Car car : {Car::Follower, Car::Target}) {
     const CarState& c = o.car(car);
-    if (c.x <= o.ego.x && (!best || c.x > best->state.x)) {
-      best = LaneCar{car, c, o.scene->size_of(car).length};
-    }
+    if (c.x <= o.ego.x && (!best || c.x > best->state.x)) best = lane_car(o, car);
   }
   return best;
 }

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <limits>
 
 #include "lanechange/ego.hpp"
 #include "lanechange/planner/planner.hpp"

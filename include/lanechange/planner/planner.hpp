@@ -83,7 +83,7 @@ class LaneKeeper {
                                    const std::optional<LaneCar>& behind = std::nullopt) const;
 
  private:
-  [[nodiscard]] double keep_up(const EgoState& ego, double gap_ahead, double ahead_speed,
+  [[nodiscard]] double keep_up(double ego_x, double speed, double gap_ahead, double ahead_speed,
                                const LaneCar& behind) const;
   Config config_;
 };
