@@ -193,6 +193,12 @@ struct ClosedLoopSettings {
   /// cars ignore the ego), as far as the car ahead and the ego's limits allow
   /// (docs/closed_loop.md); 0: the car ahead alone, as until stop 31.
   double keeper_rear_horizon = 5.0;
+  /// rad: the largest heading of the fallback's return to the ego lane while
+  /// its body is still in the target lane (a cut-in backed out of). The
+  /// default is the lane keeper's own; 0.3 backs out about twice as fast but
+  /// was measured to leave the collisions where they were (docs/closed_loop.md,
+  /// "Backing out").
+  double keeper_backout_heading = 0.15;
   /// s the hierarchical planner checks its policy ahead. 2 s, not the issue's
   /// 1 s: with 1 s the take-over came when the expert could no longer finish
   /// (docs/closed_loop.md, "Results").

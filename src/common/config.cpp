@@ -2,6 +2,7 @@
 
 #include <array>
 #include <cmath>
+#include <numbers>
 
 #include "common/config_fields.hpp"
 
@@ -25,6 +26,8 @@ void validate_closed_loop(const ClosedLoopSettings& c) {
           "the lane keeper's gains must be positive");
   require(c.keeper_rear_horizon >= 0 && std::isfinite(c.keeper_rear_horizon),
           "closed_loop.keeper_rear_horizon", "must be finite and not negative");
+  require(c.keeper_backout_heading > 0 && c.keeper_backout_heading < std::numbers::pi / 2,
+          "closed_loop.keeper_backout_heading", "must be in (0, pi/2) rad");
   require(c.lookahead >= 0, "closed_loop.lookahead", "must not be negative");
   require(c.lookahead_tolerance >= 0, "closed_loop.lookahead_tolerance", "must not be negative");
   require(c.refusal_check_period >= 0, "closed_loop.refusal_check_period", "must not be negative");

@@ -49,6 +49,7 @@ void visit_fields(V& v, S& s) requires std::same_as<std::remove_const_t<S>, Clos
   v("keeper_lateral_gain", s.keeper_lateral_gain);
   v("keeper_heading_gain", s.keeper_heading_gain);
   v("keeper_rear_horizon", s.keeper_rear_horizon);
+  v("keeper_backout_heading", s.keeper_backout_heading);
   v("lookahead", s.lookahead);
   v("lookahead_tolerance", s.lookahead_tolerance);
   v("refusal_check_period", s.refusal_check_period);

@@ -20,7 +20,6 @@ std::string_view to_string(ActStatus status) {
 EgoControl LaneKeeper::control(const EgoState& ego, double lane_center,
                                const std::optional<LaneCar>& ahead,
                                const std::optional<LaneCar>& behind) const {
-  const ClosedLoopSettings& c = config_.closed_loop;
   // The traffic's own IDM, so the ego follows as the other cars do; its
   // desired speed is the ego's speed limit at most.
   IdmParameters idm = config_.idm;
@@ -36,13 +35,21 @@ EgoControl LaneKeeper::control(const EgoState& ego, double lane_center,
   EgoControl out;
   out.a = idm_acceleration(idm, speed, gap, ahead_speed);
   if (behind) out.a = std::max(out.a, keep_up(ego.x, speed, gap, ahead_speed, *behind));
-  // Steer along a heading that closes the offset: a second-order lateral
-  // response, damped for the speeds of the scenarios (docs/closed_loop.md).
-  constexpr double kMaxHeading = 0.15;  // rad: a calm return, never a swerve
-  const double wanted =
-      std::clamp(-c.keeper_lateral_gain * (ego.y - lane_center), -kMaxHeading, kMaxHeading);
-  out.omega = c.keeper_heading_gain * (wanted - ego.theta);
+  out.omega = steer(ego, lane_center);
   return out;
+}
+
+// Steer along a heading that closes the offset: a second-order lateral
+// response, damped for the speeds of the scenarios (docs/closed_loop.md).
+double LaneKeeper::steer(const EgoState& ego, double lane_center, double max_heading) const {
+  const ClosedLoopSettings& c = config_.closed_loop;
+  const double wanted =
+      std::clamp(-c.keeper_lateral_gain * (ego.y - lane_center), -max_heading, max_heading);
+  return c.keeper_heading_gain * (wanted - ego.theta);
+}
+
+double LaneKeeper::back_out(const EgoState& ego, double lane_center) const {
+  return steer(ego, lane_center, config_.closed_loop.keeper_backout_heading);
 }
 
 // The other cars ignore the ego: a faster one behind drives into it unless
@@ -158,6 +165,10 @@ EgoControl fallback_control(const LaneKeeper& keeper, const Observation& o) {
       target_lane ? o.ego.y - half_body < w / 2.0 : o.ego.y + half_body > w / 2.0;
   if (in_other_lane) {
     u.a = std::min(u.a, keeper.control(o.ego, center, car_ahead(o, !target_lane)).a);
+    // Backing out, the ego is in the way of the target lane's cars until its
+    // body has left, 4 s and more at the keeper's calm heading; a sharper
+    // one is the user's choice (docs/closed_loop.md, "Backing out").
+    if (!target_lane) u.omega = keeper.back_out(o.ego, center);
   }
   return u;
 }

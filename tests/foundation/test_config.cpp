@@ -108,6 +108,10 @@ TEST(Config, RejectsUnknownKeysAndBadValuesByName) {
   EXPECT_EQ(field_of(R"({"traffic_max_speed": 0})"), "traffic_max_speed");
   EXPECT_EQ(field_of(R"({"closed_loop": {"keeper_rear_horizon": -1}})"),
             "closed_loop.keeper_rear_horizon");
+  EXPECT_EQ(field_of(R"({"closed_loop": {"keeper_backout_heading": 0}})"),
+            "closed_loop.keeper_backout_heading");
+  EXPECT_EQ(field_of(R"({"closed_loop": {"keeper_backout_heading": 2}})"),
+            "closed_loop.keeper_backout_heading");
   EXPECT_EQ(field_of(R"({"traffic_max_speed": "none"})"), "traffic_max_speed");
   EXPECT_EQ(field_of(R"({"idm": {"max_accel": "fast"}})"), "idm.max_accel");
   EXPECT_EQ(field_of(R"({"expert": {"cycle_tolerance": -1e-3}})"), "expert.cycle_tolerance");

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <limits>
 
 #include "lanechange/ego.hpp"
@@ -60,6 +61,49 @@ TEST(Fallback, BrakesForTheCarAheadInTheLaneItIsLeaving) {
   EXPECT_LT(u.a, -1.0);  // the leader is far ahead; the follower is not
   // Once its body has left the target lane, only its own lane counts.
   EXPECT_GT(planner::fallback_control(keeper, over_the_line(scene, 0.0)).a, 0.0);
+}
+
+// Seconds until the ego's body has left the target lane under the fallback,
+// backing out of a cut-in in front of a faster follower (every car keeps its
+// speed), and the largest |heading| and final offset from the ego lane on
+// the way, over `seconds`.
+struct BackOut {
+  double time_out = std::numeric_limits<double>::infinity();
+  double max_heading = 0.0;
+  double final_y = 0.0;
+};
+
+BackOut back_out(const Config& config, double seconds) {
+  Scenario scene = testing::open_road_scenario();
+  scene.follower = {-5.0, 11.0, 0.0};
+  const planner::LaneKeeper keeper(config);
+  planner::Observation o = over_the_line(scene, scene.lane_width);
+  constexpr double kDt = 0.1;
+  BackOut out;
+  for (double t = 0.0; t < seconds; t += kDt) {
+    EgoControl u = planner::fallback_control(keeper, o);
+    planner::clip_to_limits(u, o.ego, config.limits, kDt);
+    o.ego = step_exact(o.ego, u, kDt);
+    for (CarState& car : o.cars) car.x += car.v * kDt;
+    out.max_heading = std::max(out.max_heading, std::abs(o.ego.theta));
+    if (o.ego.y + scene.vehicle.width / 2.0 < scene.lane_width / 2.0) {
+      out.time_out = std::min(out.time_out, t + kDt);
+    }
+  }
+  out.final_y = o.ego.y;
+  return out;
+}
+
+TEST(Fallback, BacksOutAtTheBackOutHeadingAndSettlesInItsLane) {
+  Config config = testing::untimed_config();
+  const BackOut calm = back_out(config, 12.0);  // the default: the keeper's own heading
+  EXPECT_LE(calm.max_heading, planner::LaneKeeper::kCalmHeading + 1e-9);
+  config.closed_loop.keeper_backout_heading = 0.3;
+  const BackOut sharp = back_out(config, 12.0);
+  EXPECT_GT(sharp.max_heading, planner::LaneKeeper::kCalmHeading + 0.03);
+  EXPECT_LE(sharp.max_heading, 0.3 + 1e-9);
+  EXPECT_LT(std::abs(sharp.final_y), 0.25);  // no swerve past its own lane
+  EXPECT_LT(sharp.time_out + 0.5, calm.time_out);
 }
 
 // In the target lane, a constant-speed car 6 m/s faster 15 m behind the ego,
