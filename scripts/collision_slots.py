@@ -14,7 +14,7 @@ import json
 import sys
 from pathlib import Path
 
-RUN_SECONDS = 8.0  # the scenario horizon (5 s) and the settle time (3 s)
+SETTLE_SECONDS = 3.0  # closed_loop.settle_time's default: the run is the horizon and this
 STEP = 0.1
 THRESHOLDS = (10.0, 15.0, 20.0, 25.0)
 
@@ -32,7 +32,7 @@ def smallest_slot(scene):
     if scene["behavior"] == "idm":
         return None
     length = scene["vehicle"]["length"]
-    steps = int(round(RUN_SECONDS / STEP))
+    steps = int(round((scene["horizon"] + SETTLE_SECONDS) / STEP))
     return min(
         position(scene["target"], k * STEP) - position(scene["follower"], k * STEP) - length
         for k in range(steps + 1)

@@ -35,7 +35,7 @@ EgoControl LaneKeeper::control(const EgoState& ego, double lane_center,
   EgoControl out;
   out.a = idm_acceleration(idm, speed, gap, ahead_speed);
   if (behind) out.a = std::max(out.a, keep_up(ego.x, speed, gap, ahead_speed, *behind));
-  out.omega = steer(ego, lane_center);
+  out.omega = steer(ego, lane_center, kCalmHeading);
   return out;
 }
 

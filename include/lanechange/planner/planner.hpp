@@ -81,16 +81,16 @@ class LaneKeeper {
   [[nodiscard]] EgoControl control(const EgoState& ego, double lane_center,
                                    const std::optional<LaneCar>& ahead,
                                    const std::optional<LaneCar>& behind = std::nullopt) const;
-  /// The yaw rate that closes the offset to `lane_center` along a heading of
-  /// at most `max_heading` (the keeper's calm one by default).
-  [[nodiscard]] double steer(const EgoState& ego, double lane_center,
-                             double max_heading = kCalmHeading) const;
-  /// The steer of a cut-in backed out of: closed_loop.keeper_backout_heading.
+  /// The yaw rate of a cut-in backed out of: the keeper's steering with
+  /// closed_loop.keeper_backout_heading as its largest heading.
   [[nodiscard]] double back_out(const EgoState& ego, double lane_center) const;
 
   static constexpr double kCalmHeading = 0.15;  ///< rad: keeping a lane, never a swerve
 
  private:
+  /// The yaw rate that closes the offset to `lane_center` along a heading of
+  /// at most `max_heading`.
+  [[nodiscard]] double steer(const EgoState& ego, double lane_center, double max_heading) const;
   [[nodiscard]] double keep_up(double ego_x, double speed, double gap_ahead, double ahead_speed,
                                const LaneCar& behind) const;
   Config config_;
