@@ -59,7 +59,12 @@ enum class LaneRule {
   /// so optimal plans may drive astride the line (docs/expert.md).
   EitherOr,
   /// The ego is in every lane its body touches (the authors' code): the default.
+  /// The body is taken unturned, so only its centre is bounded: at a heading
+  /// the front corner reaches past the line (docs/expert.md, "The heading").
   Footprint,
+  /// As Footprint, with the body turned by its heading: the corners, to first
+  /// order in the heading, decide which lanes the body touches.
+  FootprintHeading,
 };
 
 enum class JerkWeighting {

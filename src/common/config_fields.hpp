@@ -9,8 +9,10 @@
 
 namespace lanechange {
 
-inline constexpr std::array<detail::EnumName<LaneRule>, 2> enum_names(LaneRule) {
-  return {{{LaneRule::EitherOr, "either_or"}, {LaneRule::Footprint, "footprint"}}};
+inline constexpr std::array<detail::EnumName<LaneRule>, 3> enum_names(LaneRule) {
+  return {{{LaneRule::EitherOr, "either_or"},
+           {LaneRule::Footprint, "footprint"},
+           {LaneRule::FootprintHeading, "footprint_heading"}}};
 }
 
 inline constexpr std::array<detail::EnumName<JerkWeighting>, 2> enum_names(JerkWeighting) {

@@ -65,9 +65,8 @@ void provenance(Document& d, const ReportInputs& in) {
           std::to_string(in.sizes.eval_per_behavior) +
           " closed-loop scenarios per behavior for evaluation",
       "lane rule of the default config: `" +
-          std::string(o.config.expert.lane_rule == LaneRule::Footprint ? "footprint"
-                                                                       : "either_or") +
-          "`; preset `" + o.config.preset + "`",
+          nlohmann::json(o.config).at("expert").at("lane_rule").get<std::string>() + "`; preset `" +
+          o.config.preset + "`",
   };
   std::string seeds = "seeds: expert data ";
   seeds += std::to_string(in.seeds.at("data"));

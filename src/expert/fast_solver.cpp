@@ -103,12 +103,17 @@ double mode_violation(const LaneMode& mode, const State& z) {
   return worst;
 }
 
-// The y-interval of a mode, from its rows on y alone.
-std::pair<double, double> lateral_range(const LaneMode& mode, double lo, double hi) {
+// An interval of y that holds every point of a mode, from its rows on y and
+// the heading alone (the heading at its least helpful within `heading`).
+std::pair<double, double> lateral_range(const LaneMode& mode, double lo, double hi,
+                                        const Interval& heading) {
   for (const HalfSpace& h : mode.rows) {
-    if (h.g[kX] != 0.0 || h.g[kV] != 0.0) continue;
-    if (h.g[kY] > 0.0) hi = std::min(hi, h.upper / h.g[kY]);
-    if (h.g[kY] < 0.0) lo = std::max(lo, h.upper / h.g[kY]);
+    if (h.g[kX] != 0.0 || h.g[kV] != 0.0 || h.g[kY] == 0.0) continue;
+    const double by_heading = std::min(h.g[kTheta] * heading.lo, h.g[kTheta] * heading.hi);
+    const double upper = h.g[kTheta] == 0.0 ? h.upper : h.upper - by_heading;
+    if (!std::isfinite(upper)) continue;
+    if (h.g[kY] > 0.0) hi = std::min(hi, upper / h.g[kY]);
+    if (h.g[kY] < 0.0) lo = std::max(lo, upper / h.g[kY]);
   }
   return {lo, hi};
 }
@@ -138,10 +143,12 @@ bool ramp_row(const LaneChangeQp& qp, const FastWorkspace& ws, int k, HalfSpace&
   if (count < 2) return false;
   const double ylo = qp.state_lower[k][kY];
   const double yhi = qp.state_upper[k][kY];
+  const Interval heading{std::max(qp.state_lower[k][kTheta], ws.reach_lower[k][kTheta]),
+                         std::min(qp.state_upper[k][kTheta], ws.reach_upper[k][kTheta])};
   const LaneMode& low = *modes[0];
   const LaneMode& high = *modes[count - 1];
-  const auto [low_lo, low_hi] = lateral_range(low, ylo, yhi);
-  const auto [high_lo, high_hi] = lateral_range(high, ylo, yhi);
+  const auto [low_lo, low_hi] = lateral_range(low, ylo, yhi, heading);
+  const auto [high_lo, high_hi] = lateral_range(high, ylo, yhi, heading);
   // The corners exist only where both modes reach into the node's y bounds; a
   // narrow box (the expert's trust region) can leave one out, and a line
   // anchored on it would cut off the other.
@@ -151,16 +158,20 @@ bool ramp_row(const LaneChangeQp& qp, const FastWorkspace& ws, int k, HalfSpace&
     const double u_low = limit_along(low, h.g);
     const double u_high = limit_along(high, h.g);
     if (!std::isfinite(u_low) || !std::isfinite(u_high)) continue;
-    // Every middle mode must allow no more than the larger of the two.
-    const double u_max = std::max(u_low, u_high);
+    // The ramp lies between the two limits over the node's y, and a middle
+    // mode may reach anywhere in it: it must allow no more than the smaller.
+    const double u_min = std::min(u_low, u_high);
     bool middle_ok = true;
     for (std::size_t m = 1; m + 1 < count; ++m) {
-      middle_ok = middle_ok && limit_along(*modes[m], h.g) <= u_max;
+      middle_ok = middle_ok && limit_along(*modes[m], h.g) <= u_min;
     }
     if (!middle_ok) continue;
+    // A mode that reaches the far end of the node's y leaves no line between
+    // the corners (the heading rule's rows, at large headings).
+    if ((u_high > u_low && high_lo <= ylo) || (u_high < u_low && low_hi >= yhi)) continue;
     double slope = 0.0;  // of the limit in y
-    if (u_high >= u_low && high_lo > ylo) slope = (u_high - u_low) / (high_lo - ylo);
-    if (u_high < u_low && yhi > low_hi) slope = (u_high - u_low) / (yhi - low_hi);
+    if (u_high > u_low) slope = (u_high - u_low) / (high_lo - ylo);
+    if (u_high < u_low) slope = (u_high - u_low) / (yhi - low_hi);
     const double anchor_y = u_high >= u_low ? ylo : yhi;
     const double anchor_u = u_high >= u_low ? u_low : u_high;
     // g'z <= anchor_u + slope (y - anchor_y)  <=>  g'z - slope y <= anchor_u - slope anchor_y

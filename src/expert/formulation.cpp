@@ -56,9 +56,9 @@ StageDynamics trapezoid_step(const State& at_k, const State& at_next, double dt)
   return d;
 }
 
-HalfSpace row(double gx, double gy, double gv, double upper) {
+HalfSpace row(double gx, double gy, double gv, double upper, double gtheta = 0.0) {
   HalfSpace h;
-  h.g << gx, gy, gv, 0.0;
+  h.g << gx, gy, gv, gtheta;
   h.upper = upper;
   return h;
 }
@@ -78,13 +78,25 @@ CarRows car_rows(const Scenario& s, const TrafficPrediction& p, int index) {
           row(1.0, 0.0, d.target.time_headway, p.car(Car::Target).x[index] - d.target.standstill)};
 }
 
-std::vector<LaneMode> lane_modes(const CarRows& r, LaneRule rule, double boundary,
-                                 double half_width) {
+// Where the lane line is and what the body is, at one node.
+struct LaneGeometry {
+  double boundary = 0.0;     ///< y of the lane line
+  double half_width = 0.0;   ///< of the ego's body
+  double half_length = 0.0;  ///< of the ego's body
+  Interval heading;          ///< the headings the node can have
+};
+
+std::vector<LaneMode> footprint_heading_modes(const CarRows& r, const LaneGeometry& lane);
+
+std::vector<LaneMode> lane_modes(const CarRows& r, LaneRule rule, const LaneGeometry& lane) {
+  const double boundary = lane.boundary;
+  const double half_width = lane.half_width;
   if (rule == LaneRule::EitherOr) {
     return {{LaneOccupancy::EgoLane, {r.behind_leader, row(0, 1, 0, boundary)}},
             {LaneOccupancy::TargetLane,
              {r.ahead_of_follower, r.behind_target, row(0, -1, 0, -boundary)}}};
   }
+  if (rule == LaneRule::FootprintHeading) return footprint_heading_modes(r, lane);
   // Footprint: the body is in every lane it touches. Touching both lanes
   // needs every row; the y rows of the one-lane modes keep the body clear of
   // the lane line. The both-lanes mode is limited to the band where the body
@@ -98,6 +110,43 @@ std::vector<LaneMode> lane_modes(const CarRows& r, LaneRule rule, double boundar
             row(0, 1, 0, boundary + half_width), row(0, -1, 0, -(boundary - half_width))}},
           {LaneOccupancy::TargetLane,
            {r.ahead_of_follower, r.behind_target, row(0, -1, 0, -(boundary + half_width))}}};
+}
+
+// The body turned by theta reaches half_width cos(theta) + half_length
+// |sin(theta)| to either side of its centre; half_width + half_length |theta|
+// is never less, so a one-lane mode's two rows (one per sign of theta) keep
+// every corner in its lane. The both-lanes set, |y - line| <= half_width +
+// half_length |theta|, is not convex; its rows are its convex hull over the
+// node's headings (|theta| replaced by its chord there), so the three modes
+// still cover the road and the search stays exact. Where the headings have one
+// sign, as under monotone_lateral, the chord is |theta| itself.
+std::vector<LaneMode> footprint_heading_modes(const CarRows& r, const LaneGeometry& lane) {
+  const double b = lane.boundary;
+  const double w = lane.half_width;
+  const double l = lane.half_length;
+  const double lo = lane.heading.lo;
+  const double hi = lane.heading.hi;
+  // |theta| <= chord_at_lo + chord_slope (theta - lo) on [lo, hi].
+  const double chord_slope = hi > lo ? (std::abs(hi) - std::abs(lo)) / (hi - lo) : 0.0;
+  const double chord_offset = std::abs(lo) - chord_slope * lo;
+  const double reach = w + l * chord_offset;
+  const double slope = l * chord_slope;
+  return {
+      {LaneOccupancy::EgoLane, {r.behind_leader, row(0, 1, 0, b - w, l), row(0, 1, 0, b - w, -l)}},
+      {LaneOccupancy::BothLanes,
+       {r.behind_leader, r.ahead_of_follower, r.behind_target, row(0, 1, 0, b + reach, -slope),
+        row(0, -1, 0, reach - b, -slope)}},
+      {LaneOccupancy::TargetLane,
+       {r.ahead_of_follower, r.behind_target, row(0, -1, 0, -(b + w), l),
+        row(0, -1, 0, -(b + w), -l)}}};
+}
+
+// The headings a node at time t can have: its bounds, cut to what the yaw
+// rate can reach from the ego's heading.
+Interval reachable_headings(const Scenario& s, Interval bounds, double t) {
+  const double lo = std::max(bounds.lo, s.ego.theta + s.limits.omega.lo * t);
+  const double hi = std::min(bounds.hi, s.ego.theta + s.limits.omega.hi * t);
+  return lo <= hi ? Interval{lo, hi} : bounds;
 }
 
 double terminal_aim(const Scenario& s, const Config& c, const TrafficPrediction& p) {
@@ -168,8 +217,10 @@ LaneChangeQp build_lane_change_qp(const Scenario& s, const Config& config, const
   const int last_prediction = prediction.nodes() - 1;
   for (int k = e.constrain_initial_node ? 0 : 1; k <= n; ++k) {
     const int index = std::min(k + e.prediction_lead_steps, last_prediction);
-    qp.node_modes[k] = lane_modes(car_rows(s, prediction, index), e.lane_rule, 0.5 * s.lane_width,
-                                  0.5 * s.vehicle.width);
+    const Interval heading{qp.state_lower[k][kTheta], qp.state_upper[k][kTheta]};
+    const LaneGeometry lane{0.5 * s.lane_width, 0.5 * s.vehicle.width, 0.5 * s.vehicle.length,
+                            reachable_headings(s, heading, k * qp.dt)};
+    qp.node_modes[k] = lane_modes(car_rows(s, prediction, index), e.lane_rule, lane);
   }
   return qp;
 }

@@ -45,7 +45,8 @@ TEST(Formulation, LinearizedStepIsExactAtItsOwnPoint) {
 }
 
 TEST(Formulation, MiqpFormHasTheSameObjective) {
-  for (const LaneRule rule : {LaneRule::EitherOr, LaneRule::Footprint}) {
+  for (const LaneRule rule :
+       {LaneRule::EitherOr, LaneRule::Footprint, LaneRule::FootprintHeading}) {
     Config config;
     config.expert.lane_rule = rule;
     const Scenario s = ScenarioSampler(config, 4).sample(0);
@@ -112,6 +113,89 @@ TEST(Formulation, WarmStartTimedToModesCrossesAtTheirSwitchNodes) {
   ASSERT_EQ(w.controls.size(), w.states.size() - 1);
   const double dt = s.horizon / s.steps;
   EXPECT_NEAR(w.states[1][kTheta], w.states[0][kTheta] + dt * w.controls[0][1], 1e-9);
+}
+
+// The lane rows alone (those on y and the heading) of a mode hold at (y, theta).
+bool meets_lane_rows(const LaneMode& mode, double y, double theta) {
+  State z(0.0, y, 0.0, theta);
+  for (const HalfSpace& h : mode.rows) {
+    if (h.g[kX] == 0.0 && h.g[kV] == 0.0 && h.g.dot(z) > h.upper + 1e-9) return false;
+  }
+  return true;
+}
+
+// Under the heading rule a one-lane mode keeps the turned body's every corner
+// in its lane, and the three modes still cover every lateral position and
+// heading a node can reach; the footprint rule, which bounds the centre,
+// lets a turned body's corner past the line.
+TEST(Formulation, HeadingFootprintKeepsEveryCornerInItsLane) {
+  Config config;
+  config.expert.lane_rule = LaneRule::FootprintHeading;
+  const Scenario s = ScenarioSampler(config, 4).sample(0);
+  const LaneChangeQp qp = first_round_problem(s, config);
+  config.expert.lane_rule = LaneRule::Footprint;
+  const LaneChangeQp unturned = first_round_problem(s, config);
+  const double line = 0.5 * s.lane_width;
+  const double half_width = 0.5 * s.vehicle.width;
+  const double half_length = 0.5 * s.vehicle.length;
+  const int ego = lane_mode_index(LaneRule::FootprintHeading, LaneOccupancy::EgoLane);
+  const int target = lane_mode_index(LaneRule::FootprintHeading, LaneOccupancy::TargetLane);
+  int crossing_unturned = 0;
+  for (const int k : {3, 20, qp.steps}) {
+    const double t = k * qp.dt;
+    const double lowest = std::max(qp.state_lower[k][kTheta], s.ego.theta + s.limits.omega.lo * t);
+    const double highest = std::min(qp.state_upper[k][kTheta], s.ego.theta + s.limits.omega.hi * t);
+    for (int i = 0; i <= 20; ++i) {
+      const double theta = lowest + (highest - lowest) * i / 20.0;
+      const double reach = half_width * std::cos(theta) + half_length * std::abs(std::sin(theta));
+      for (double y = -1.0; y <= s.lane_width + 1.0; y += 0.05) {
+        const auto& modes = qp.node_modes[k];
+        if (meets_lane_rows(modes[ego], y, theta)) {
+          EXPECT_LE(y + reach, line) << "node " << k << ", y " << y;
+        }
+        if (meets_lane_rows(modes[target], y, theta)) {
+          EXPECT_GE(y - reach, line) << "node " << k << ", y " << y;
+        }
+        bool covered = false;
+        for (const LaneMode& mode : modes) covered = covered || meets_lane_rows(mode, y, theta);
+        EXPECT_TRUE(covered) << "node " << k << ", y " << y << ", heading " << theta;
+        if (meets_lane_rows(unturned.node_modes[k][ego], y, theta) && y + reach > line + 0.1) {
+          ++crossing_unturned;
+        }
+      }
+    }
+  }
+  EXPECT_GT(crossing_unturned, 0);
+}
+
+// Whole plans under the heading rule: at every node the plan puts in one lane,
+// the turned body is wholly in that lane.
+TEST(Formulation, HeadingFootprintPlansKeepTheBodyInTheirLanes) {
+  Config config;
+  config.expert.lane_rule = LaneRule::FootprintHeading;
+  const ScenarioSampler sampler(config, 41);
+  int converged = 0;
+  for (std::uint64_t i = 0; i < 8; ++i) {
+    const Scenario s = sampler.sample(i);
+    const ExpertResult plan =
+        ExpertPlanner(config, std::make_shared<FastLaneChangeSolver>()).plan(s);
+    if (plan.status != PlanStatus::Converged) continue;
+    ++converged;
+    const double line = 0.5 * s.lane_width;
+    for (std::size_t k = 1; k < plan.path.states.size(); ++k) {
+      const State& z = plan.path.states[k];
+      const double reach = 0.5 * s.vehicle.width * std::cos(z[kTheta]) +
+                           0.5 * s.vehicle.length * std::abs(std::sin(z[kTheta]));
+      const double slack = 1e-6;  // the QP's rows hold to its tolerance
+      if (plan.occupancy[k] == LaneOccupancy::EgoLane) {
+        EXPECT_LE(z[kY] + reach, line + slack) << "scene " << i << ", node " << k;
+      }
+      if (plan.occupancy[k] == LaneOccupancy::TargetLane) {
+        EXPECT_GE(z[kY] - reach, line - slack) << "scene " << i << ", node " << k;
+      }
+    }
+  }
+  EXPECT_GT(converged, 0);
 }
 
 // The fast solver and Bonmin on the same first-round MIQPs, small enough for
@@ -215,12 +299,14 @@ TEST(CrossCheckReplayCli, UsesTheConfigStoredWithEachCase) {
 
 INSTANTIATE_TEST_SUITE_P(SampledScenarios, CrossCheck,
                          ::testing::Combine(::testing::Values(LaneRule::EitherOr,
-                                                              LaneRule::Footprint),
+                                                              LaneRule::Footprint,
+                                                              LaneRule::FootprintHeading),
                                             ::testing::Range(0, 4)),
                          [](const auto& info) {
-                           return std::string(std::get<0>(info.param) == LaneRule::EitherOr
-                                                  ? "either_or_"
-                                                  : "footprint_") +
+                           const LaneRule rule = std::get<0>(info.param);
+                           return std::string(rule == LaneRule::EitherOr    ? "either_or_"
+                                              : rule == LaneRule::Footprint ? "footprint_"
+                                                                            : "heading_") +
                                   std::to_string(std::get<1>(info.param));
                          });
 
@@ -269,7 +355,8 @@ TEST(FastSolver, ReachableModesChangeNoAnswerAndSaveNodes) {
   const FastLaneChangeSolver plain(FastSolverOptions{.reachable_modes = false});
   long nodes_tightened = 0;
   long nodes_plain = 0;
-  for (const LaneRule rule : {LaneRule::Footprint, LaneRule::EitherOr}) {
+  for (const LaneRule rule :
+       {LaneRule::Footprint, LaneRule::EitherOr, LaneRule::FootprintHeading}) {
     Config config;
     config.expert.lane_rule = rule;
     const ScenarioSampler sampler(config, 29);
@@ -295,7 +382,8 @@ TEST(FastSolver, ReachableModesChangeNoAnswerAndSaveNodes) {
 TEST(FastSolver, TheModeBoxRefusesOnlyModesNoQpMeets) {
   int refused = 0;
   int infeasible = 0;
-  for (const LaneRule rule : {LaneRule::Footprint, LaneRule::EitherOr}) {
+  for (const LaneRule rule :
+       {LaneRule::Footprint, LaneRule::EitherOr, LaneRule::FootprintHeading}) {
     Config config;
     config.expert.lane_rule = rule;
     const ScenarioSampler sampler(config, 31);
