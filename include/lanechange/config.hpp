@@ -130,6 +130,10 @@ struct ExpertSettings {
   /// ego lane to take a run-up at the line (docs/closed_loop.md). Not in the
   /// paper, whose labels call such plans ill-posed instead.
   bool monotone_lateral = false;
+  /// m; above 0, the yaw rate is bounded by the speed, |omega| <= v / R, as a
+  /// car's steering bounds its curvature: no turning on the spot. 0 leaves the
+  /// unicycle's bound of limits.omega alone, as the paper does.
+  double min_turn_radius = 0.0;
   WarmStart warm_start = WarmStart::Quintic;
   /// Where the warm start and the terminal-x term aim: behind the target by
   /// its safe distance (NOTES.md), or at the target itself (authors' code).

@@ -116,6 +116,8 @@ void Config::validate() const {
           "must be in (0, 1)");
   require(expert.trust_rounds >= 1, "expert.trust_rounds", "must be at least 1");
   require(expert.big_m > 0, "expert.big_m", "must be positive");
+  require(std::isfinite(expert.min_turn_radius) && expert.min_turn_radius >= 0,
+          "expert.min_turn_radius", "must be finite and not negative (0: off)");
   require(expert.prediction_lead_steps >= 0 && expert.prediction_lead_steps <= 10,
           "expert.prediction_lead_steps", "must be in [0, 10]");
   require(labels.reach > 0, "labels.reach", "must be positive");

@@ -121,6 +121,7 @@ void visit_fields(V& v, S& s) requires std::same_as<std::remove_const_t<S>, Expe
   v("constrain_initial_node", s.constrain_initial_node);
   v("prediction_lead_steps", s.prediction_lead_steps);
   v("monotone_lateral", s.monotone_lateral);
+  v("min_turn_radius", s.min_turn_radius);
   v("warm_start", s.warm_start);
   v("aim_behind_target", s.aim_behind_target);
 }

@@ -45,6 +45,16 @@ void add_control_bound(QpStage& stage, int component, double lo, double hi) {
   stage.rows.push_back(lower);
 }
 
+// |omega| <= kappa v: two rows on the stage's speed and yaw rate.
+void add_turn_rows(QpStage& stage, double kappa) {
+  for (const double sign : {1.0, -1.0}) {
+    QpRow row;
+    row.g[kV] = -kappa;
+    row.g[kQpStates + kOmega] = sign;
+    stage.rows.push_back(row);
+  }
+}
+
 // The round's QP without lane rows, in the solver's stage form.
 void build_base(const LaneChangeQp& qp, StructuredQp& out) {
   const int n = qp.steps;
@@ -81,6 +91,7 @@ void build_base(const LaneChangeQp& qp, StructuredQp& out) {
       }
       add_control_bound(st, kA, qp.control_lower[kA], qp.control_upper[kA]);
       add_control_bound(st, kOmega, qp.control_lower[kOmega], qp.control_upper[kOmega]);
+      if (qp.yaw_rate_per_speed > 0.0) add_turn_rows(st, qp.yaw_rate_per_speed);
     }
     const double wy = qp.lateral_weight[k];
     st.H(kY, kY) += 2.0 * wy;

@@ -213,6 +213,7 @@ LaneChangeQp build_lane_change_qp(const Scenario& s, const Config& config, const
   qp.control_lower << s.limits.a.lo, s.limits.omega.lo;
   qp.control_upper << s.limits.a.hi, s.limits.omega.hi;
   qp.terminal_lateral_fixed = e.fix_terminal_lateral;
+  qp.yaw_rate_per_speed = e.min_turn_radius > 0.0 ? 1.0 / e.min_turn_radius : 0.0;
   qp.node_modes.assign(n + 1, {});
   const int last_prediction = prediction.nodes() - 1;
   for (int k = e.constrain_initial_node ? 0 : 1; k <= n; ++k) {
@@ -282,6 +283,10 @@ double LaneChangeQp::max_violation(const Iterate& path) const {
     worst = std::max(worst, (next - path.states[k + 1]).cwiseAbs().maxCoeff());
     worst = std::max(worst, (control_lower - path.controls[k]).maxCoeff());
     worst = std::max(worst, (path.controls[k] - control_upper).maxCoeff());
+    if (yaw_rate_per_speed > 0.0) {
+      const double turn = std::abs(path.controls[k][kOmega]);
+      worst = std::max(worst, turn - yaw_rate_per_speed * path.states[k][kV]);
+    }
   }
   for (int k = 1; k <= steps; ++k) {
     worst = std::max(worst, (state_lower[k] - path.states[k]).maxCoeff());
@@ -330,6 +335,18 @@ void add_dynamics_rows(const LaneChangeQp& qp, const MiqpLayout& at, RowBuilder&
       for (int j = 0; j < 2; ++j) {
         if (d.B(i, j) != 0.0) rows.entries.emplace_back(r, at.control(k, j), -d.B(i, j));
       }
+    }
+  }
+}
+
+// -omega_k - kappa v_k <= 0 and omega_k - kappa v_k <= 0.
+void add_turn_rows(const LaneChangeQp& qp, const MiqpLayout& at, RowBuilder& rows) {
+  if (qp.yaw_rate_per_speed <= 0.0) return;
+  for (int k = 0; k < qp.steps; ++k) {
+    for (const double sign : {1.0, -1.0}) {
+      const int r = rows.add(-kInfinity, 0.0);
+      rows.entries.emplace_back(r, at.control(k, kOmega), sign);
+      rows.entries.emplace_back(r, at.state(k, kV), -qp.yaw_rate_per_speed);
     }
   }
 }
@@ -437,6 +454,7 @@ MiqpProblem to_miqp(const LaneChangeQp& qp, double big_m, MiqpLayout& layout) {
   set_bounds(qp, layout, p);
   RowBuilder rows;
   add_dynamics_rows(qp, layout, rows);
+  add_turn_rows(qp, layout, rows);
   add_lane_rows(qp, big_m, layout, rows);
   const int m = static_cast<int>(rows.lower.size());
   p.constraints.resize(m, size);

@@ -32,11 +32,16 @@ void check_dynamics(const Trajectory& tr, const Scenario& s, double tol,
   }
 }
 
-void check_bounds(const Trajectory& tr, const Scenario& s, const AuditTolerances& tol,
-                  std::vector<std::string>& problems) {
+void check_bounds(const Trajectory& tr, const Scenario& s, const Config& config,
+                  const AuditTolerances& tol, std::vector<std::string>& problems) {
   const Limits& lim = s.limits;
+  const double radius = config.expert.min_turn_radius;
   for (int k = 0; k + 1 < tr.nodes(); ++k) {
     const EgoControl& u = tr.controls[k];
+    if (radius > 0.0 && std::abs(u.omega) > tr.ego[k].v / radius + tol.controls) {
+      problems.push_back(
+          describe("omega[%d] = %.4f turns tighter than min_turn_radius", k, u.omega));
+    }
     if (u.a < lim.a.lo - tol.controls || u.a > lim.a.hi + tol.controls) {
       problems.push_back(describe("a[%d] = %.4f is out of its bounds", k, u.a));
     }
@@ -94,7 +99,7 @@ std::vector<std::string> audit_trajectory(const Trajectory& tr, const Scenario& 
     }
   }
   check_dynamics(tr, s, tol.dynamics, problems);
-  check_bounds(tr, s, tol, problems);
+  check_bounds(tr, s, config, tol, problems);
   check_label(tr, s, config, problems);
   return problems;
 }

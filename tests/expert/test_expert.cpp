@@ -198,6 +198,51 @@ TEST(Formulation, HeadingFootprintPlansKeepTheBodyInTheirLanes) {
   EXPECT_GT(converged, 0);
 }
 
+// With a least turn radius no stage yaws faster than its speed allows, the
+// fast solver and Bonmin agree on the rows that say so, and the bound moves
+// some plan: at the sampler's speeds it binds where a plan brakes hard.
+TEST(Formulation, TurnRadiusBoundsTheYawRateBySpeed) {
+  Config config;
+  config.expert.min_turn_radius = 40.0;  // tight enough to bind at these speeds
+  const ScenarioSampler sampler(config, 43);
+  const auto planner = [&config] {
+    return ExpertPlanner(config, std::make_shared<FastLaneChangeSolver>());
+  };
+  Config free_config = config;
+  free_config.expert.min_turn_radius = 0.0;
+  int converged = 0;
+  int moved = 0;
+  for (std::uint64_t i = 0; i < 8; ++i) {
+    const Scenario s = sampler.sample(i);
+    const ExpertResult plan = planner().plan(s);
+    if (plan.status != PlanStatus::Converged) continue;
+    ++converged;
+    for (std::size_t k = 0; k < plan.path.controls.size(); ++k) {
+      EXPECT_LE(std::abs(plan.path.controls[k][kOmega]),
+                plan.path.states[k][kV] / config.expert.min_turn_radius + 1e-6)
+          << "scene " << i << ", stage " << k;
+    }
+    const ExpertResult free =
+        ExpertPlanner(free_config, std::make_shared<FastLaneChangeSolver>()).plan(s);
+    if (free.status == PlanStatus::Converged && std::abs(free.objective - plan.objective) > 1e-3) {
+      ++moved;
+    }
+  }
+  EXPECT_GT(converged, 0);
+  EXPECT_GT(moved, 0);
+  for (int index = 0; index < 3; ++index) {
+    Config small = config;
+    small.expert.steps = 6;
+    const LaneChangeQp qp = first_round_problem(
+        ScenarioSampler(small, 17).sample(static_cast<std::uint64_t>(index)), small);
+    EXPECT_GT(qp.yaw_rate_per_speed, 0.0);
+    const CrossCheckCase c =
+        cross_check(qp, FastLaneChangeSolver{}, ReferenceLaneChangeSolver{}, {}, 1e-6);
+    EXPECT_TRUE(c.agree) << "scene " << index << ": " << c.fast_objective << " against "
+                         << c.reference_objective;
+  }
+}
+
 // The fast solver and Bonmin on the same first-round MIQPs, small enough for
 // the reference to take seconds: N = 10 with the either-or rule (20
 // binaries), N = 6 with the footprint rule (18 binaries; Bonmin's B-BB needs

@@ -104,6 +104,8 @@ TEST(Config, RejectsUnknownKeysAndBadValuesByName) {
   EXPECT_EQ(field_of(R"({"expert": {"trust_radius": 0}})"), "expert.trust_radius");
   EXPECT_EQ(field_of(R"({"expert": {"trust_shrink": 1}})"), "expert.trust_shrink");
   EXPECT_EQ(field_of(R"({"expert": {"trust_rounds": 0}})"), "expert.trust_rounds");
+  EXPECT_EQ(field_of(R"({"expert": {"min_turn_radius": -5}})"), "expert.min_turn_radius");
+  EXPECT_EQ(field_of(R"({"expert": {"min_turn_radius": 5}})"), "<accepted>");
   EXPECT_EQ(field_of(R"({"preset": "nobody"})"), "preset");
   EXPECT_EQ(field_of(R"({"traffic_max_speed": 0})"), "traffic_max_speed");
   EXPECT_EQ(field_of(R"({"closed_loop": {"keeper_rear_horizon": -1}})"),

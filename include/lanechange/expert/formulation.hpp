@@ -71,6 +71,8 @@ struct LaneChangeQp {
   Control control_lower = Control::Zero();
   Control control_upper = Control::Zero();
   bool terminal_lateral_fixed = true;
+  /// Above 0: |omega_k| <= this * v_k at every stage (expert.min_turn_radius).
+  double yaw_rate_per_speed = 0.0;
   /// steps + 1 entries; an empty list puts no lane logic on that node.
   std::vector<std::vector<LaneMode>> node_modes;
 
