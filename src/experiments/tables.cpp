@@ -154,8 +154,9 @@ std::vector<std::string> dagger_verdicts(const dagger::DaggerReport& report) {
           std::to_string(rounds.back().taken_over_later) + " after round " + std::to_string(steps) +
           ").",
       std::string(gap <= 2.0 ? "Met" : "Not met") +
-          ": mlp-miqp within 2 points of miqp after DAgger (" + fixed(gap, 1) +
-          " points below miqp after round " + std::to_string(steps) + ").",
+          ": mlp-miqp within 2 points of miqp after DAgger (" + fixed(std::abs(gap), 1) +
+          (gap >= 0.0 ? " points below" : " points above") + " miqp after round " +
+          std::to_string(steps) + ").",
   };
 }
 
