@@ -121,6 +121,7 @@ std::pair<double, double> lateral_range(const LaneMode& mode, double lo, double 
   for (const HalfSpace& h : mode.rows) {
     if (h.g[kX] != 0.0 || h.g[kV] != 0.0 || h.g[kY] == 0.0) continue;
     const double by_heading = std::min(h.g[kTheta] * heading.lo, h.g[kTheta] * heading.hi);
+    // A row without the heading must not meet an infinite heading bound (0 * inf).
     const double upper = h.g[kTheta] == 0.0 ? h.upper : h.upper - by_heading;
     if (!std::isfinite(upper)) continue;
     if (h.g[kY] > 0.0) hi = std::min(hi, upper / h.g[kY]);
@@ -465,7 +466,9 @@ void prepare_round(const LaneChangeQp& qp, const SolveHints& hints, FastWorkspac
   if (hints.controls != nullptr && static_cast<int>(hints.controls->size()) == n) {
     ws.start_controls = *hints.controls;
   }
-  // Strictly inside the control bounds, which are the only hard rows.
+  // Strictly inside the control bounds. The turn rows (min_turn_radius) are hard
+  // too but tie the yaw rate to a speed the start does not know; the method
+  // starts from any point, and they may start broken.
   const Control margin = 1e-3 * (qp.control_upper - qp.control_lower);
   for (Control& u : ws.start_controls) {
     u = u.cwiseMax(qp.control_lower + margin).cwiseMin(qp.control_upper - margin);
