@@ -115,11 +115,13 @@ RolloutMetrics measure(const Rollout& rollout, const Scenario& scene, const Conf
     if (s.lane_keeping) continue;
     ms.push_back(s.compute_ms);
     m.max_step_ms = std::max(m.max_step_ms, s.compute_ms);
-    // A take-over lasts while the expert drives: count its start.
-    const bool took_over = s.status == planner::ActStatus::TookOver;
+    // A take-over lasts while the expert drives: count its start. It counts
+    // where the planner decided it, even if that step's plan overran its
+    // budget: a loaded machine would otherwise move it later.
+    const bool took_over = s.decided == planner::ActStatus::TookOver;
     if (took_over && m.first_takeover_t < 0.0) m.first_takeover_t = t.t[k];
     m.takeovers += took_over && before != planner::ActStatus::TookOver ? 1 : 0;
-    before = s.status;
+    before = s.decided;
     m.fallbacks += s.status == planner::ActStatus::Fallback ? 1 : 0;
     m.failures += s.status == planner::ActStatus::Failed && !s.overrun ? 1 : 0;
     m.overruns += s.overrun ? 1 : 0;

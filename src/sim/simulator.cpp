@@ -79,12 +79,14 @@ class Loop {
     }
     record.compute_ms = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
     record.status = d.status;
+    record.decided = d.status;
     record.reason = d.reason;
     if (record.compute_ms > config_.closed_loop.step_budget_ms && d.status != ActStatus::Failed) {
       record.overrun = true;
       record.status = ActStatus::Failed;
       record.reason = "over its budget of " + std::to_string(config_.closed_loop.step_budget_ms) +
-                      " ms; the fallback acted";
+                      " ms; the fallback acted" +
+                      (d.reason.empty() ? "" : " (the planner: " + d.reason + ")");
     }
     if (record.status == ActStatus::Failed) return planner::fallback_control(keeper_, o);
     return d.control;

@@ -156,6 +156,25 @@ TEST(ClosedLoop, AThrowingOrSlowPlannerIsRecordedAndTheFallbackActs) {
   EXPECT_NEAR(r.trajectory.controls[0].omega, s.limits.omega.hi, 1e-12);
 }
 
+// A take-over whose first plan overran its budget was still made at that
+// step: the count and its time must not depend on the machine's load.
+TEST(ClosedLoop, ATakeOverCountsWhereItWasDecidedEvenIfItsStepOverran) {
+  Config config;
+  config.closed_loop.step_budget_ms = 5.0;
+  const ScriptedPlanner taking_over([](const Observation& o) -> Decision {
+    if (o.step == 0) std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    if (o.step > 3) return {};
+    return {{}, ActStatus::TookOver, o.step == 0 ? "take-over: the check failed" : "drives on"};
+  });
+  const sim::Rollout r = sim::simulate(open_road(), taking_over, config, {1.0});
+  ASSERT_TRUE(r.steps[0].overrun);
+  EXPECT_EQ(r.steps[0].status, ActStatus::Failed);
+  EXPECT_EQ(r.steps[0].decided, ActStatus::TookOver);
+  EXPECT_NE(r.steps[0].reason.find("the check failed"), std::string::npos) << r.steps[0].reason;
+  EXPECT_EQ(r.metrics.first_takeover_t, 0.0);
+  EXPECT_EQ(r.metrics.takeovers, 1);
+}
+
 TEST(ClosedLoop, JudgeTellsAbortFromFailure) {
   Config config;
   Trajectory t;

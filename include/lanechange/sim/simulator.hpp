@@ -32,7 +32,10 @@ struct SimOptions {
 /// One step of a rollout, as the planner and the simulator saw it.
 struct StepRecord {
   double compute_ms = 0.0;
-  planner::ActStatus status = planner::ActStatus::Planned;
+  planner::ActStatus status = planner::ActStatus::Planned;  ///< who acted
+  /// What the planner decided: an overrun hands a take-over's step to the
+  /// fallback, but the take-over was still made then.
+  planner::ActStatus decided = planner::ActStatus::Planned;
   bool lane_keeping = false;  ///< the manoeuvre was over: the lane keeper drove
   bool clipped = false;       ///< the simulator clipped the control to the limits
   bool overrun = false;       ///< the planner took longer than its budget
