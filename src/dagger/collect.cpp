@@ -172,16 +172,20 @@ class LearnerPlanner final : public planner::ClosedLoopPlanner {
 
 }  // namespace
 
+Config untimed(const Config& config) {
+  Config out = config;
+  out.closed_loop.step_budget_ms = 1e12;
+  return out;
+}
+
 std::vector<Query> collect_scene(const Scenario& scene, const planner::MlpMiqpPlanner& learner,
                                  const Config& config, const Labelling& labelling) {
   if (!rolled_out(scene, learner, labelling)) return {};
   // The expert's queries are labelling, not driving: they must never count
   // as an overrun that hands the step to the fallback.
-  Config untimed = config;
-  untimed.closed_loop.step_budget_ms = 1e12;
   std::vector<Query> queries;
   const LearnerPlanner planner(learner, labelling, queries);
-  (void)sim::simulate(scene, planner, untimed);
+  (void)sim::simulate(scene, planner, untimed(config));
   return queries;
 }
 

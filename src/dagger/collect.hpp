@@ -13,6 +13,13 @@
 
 namespace lanechange::dagger::detail {
 
+/// `config` with the step budget lifted. DAgger's labels and its scoring
+/// measure what the network learnt, not the machine: under a budget a loaded
+/// machine cuts the take-over's plans short and hands steps to the fallback,
+/// which moved one model's take-overs by up to 0.014 per rollout between
+/// scorings (docs/strategy.md, stop 35).
+[[nodiscard]] Config untimed(const Config& config);
+
 /// The expert's plan from one visited state, cut to its first nodes: node 0
 /// holds the observation's inputs and the control the expert applies there.
 struct Query {

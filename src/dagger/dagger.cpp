@@ -196,7 +196,7 @@ RoundRow evaluate(const DaggerOptions& o, Scenes scenes, const std::string& plan
   e.planners = {planner};
   e.model_dir = model;
   e.out_dir = (fs::path(o.work_dir) / name).string();
-  e.config = o.config;
+  e.config = detail::untimed(o.config);
   sim::EvaluateRun run;
   run.jobs = o.jobs;
   run.progress = progress;

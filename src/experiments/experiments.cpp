@@ -351,7 +351,9 @@ ExperimentReport run_experiments(const ExperimentOptions& o) {
                                           {"models", models},
                                           {"rounds", c.sizes.dagger_rounds},
                                           {"scenes", c.sizes.dagger_scenes},
-                                          {"eval_count", 3 * c.sizes.eval_per_behavior}},
+                                          {"eval_count", 3 * c.sizes.eval_per_behavior},
+                                          // Since stop 35: scored with the budget lifted.
+                                          {"scoring", "untimed"}},
                                          {"dagger"}, StageRunner::Ranks::First, [&] {
                                            (void)dagger::run(dagger_options(c), c.options.progress);
                                          });

@@ -135,7 +135,9 @@ void dagger_section(Document& d, const ReportInputs& in) {
       "network; round 0 is the model above. mlp-miqp is then scored on " +
       std::to_string(o.eval_count) + " held-out scenes of all behaviors (seed " +
       std::to_string(o.eval_seed) +
-      "), and miqp once on the same scenes. \"Network drives\" counts the held-out rollouts the "
+      "), and miqp once on the same scenes, both with the step budget lifted as for the "
+      "labels, so that the rounds' scores do not depend on the machine's load (Table II's are "
+      "timed). \"Network drives\" counts the held-out rollouts the "
       "classifier lets the network drive; of those, the check takes some over at the network's "
       "first step (the scene's own start) and some later. The same run alone: "
       "`lanechange train --data DATA... --dagger R` (docs/strategy.md).");

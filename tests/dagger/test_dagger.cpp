@@ -396,6 +396,15 @@ TEST_F(DaggerCli, OneRoundAddsLabelsAsAValidDataSetAndTabulatesEachRound) {
     EXPECT_LE(std::stoll(table[r][8]) + std::stoll(table[r][9]), std::stoll(table[r][7]));
   }
   EXPECT_EQ(table[3][7], "0");
+  // The rounds are scored with the step budget lifted, whatever the run's
+  // config says, so that their scores do not depend on the machine's load.
+  for (const char* eval : {"/eval-0/evaluation.json", "/eval-miqp/evaluation.json"}) {
+    const auto written = nlohmann::json::parse(testing::read_text(work + eval));
+    EXPECT_EQ(written["parameters"]["config"]["closed_loop"]["step_budget_ms"].get<double>(),
+              dagger::detail::untimed(small_config()).closed_loop.step_budget_ms);
+  }
+  EXPECT_GT(dagger::detail::untimed(small_config()).closed_loop.step_budget_ms,
+            small_config().closed_loop.step_budget_ms);
 
   // --out holds the last round's model: a new network, the base's classifiers.
   const learn::Model model = learn::Model::load(dir_.file("model"));
