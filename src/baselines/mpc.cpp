@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <coin/IpSolveStatistics.hpp>
+#include <mutex>
 
 #include "expert/coin_glue.hpp"
 #include "lanechange/expert/bonmin_solver.hpp"
@@ -294,6 +295,28 @@ MpcResult MpcSolver::solve(MpcProblemData data, MpcPlan guess, double time_limit
   }
   if (result.status != MpcStatus::Solved) result.message = failure_message(status);
   return result;
+}
+
+// Ipopt's solves are serialised process-wide (MUMPS is not thread-safe). Two
+// mpc rollouts on two threads would wait for each other's solves inside their
+// timed steps, and a wait over the 100 ms budget hands the step to the
+// fallback: mpc's results depended on --jobs (docs/baselines.md). A session
+// therefore takes the turn when it starts, outside the steps, and keeps it
+// for its rollout. The other threads' planners run meanwhile.
+namespace {
+std::mutex& mpc_turn_mutex() {
+  static std::mutex m;
+  return m;
+}
+thread_local int mpc_turns_held = 0;
+}  // namespace
+
+MpcRolloutTurn::MpcRolloutTurn() {
+  if (mpc_turns_held++ == 0) mpc_turn_mutex().lock();
+}
+
+MpcRolloutTurn::~MpcRolloutTurn() {
+  if (--mpc_turns_held == 0) mpc_turn_mutex().unlock();
 }
 
 MpcSession::MpcSession(const Config& config)

@@ -71,6 +71,19 @@ class MpcSolver {
 [[nodiscard]] MpcResult solve_mpc(MpcSolver& solver, const Scenario& scene, const Config& config,
                                   const MpcPlan& guess);
 
+/// Holds the process's one turn to run an mpc rollout (mpc.cpp says why).
+/// Must be released on the thread that took it; a thread's nested turns
+/// share the one it holds.
+class MpcRolloutTurn {
+ public:
+  MpcRolloutTurn();
+  ~MpcRolloutTurn();
+  MpcRolloutTurn(const MpcRolloutTurn&) = delete;
+  MpcRolloutTurn& operator=(const MpcRolloutTurn&) = delete;
+  MpcRolloutTurn(MpcRolloutTurn&&) = delete;
+  MpcRolloutTurn& operator=(MpcRolloutTurn&&) = delete;
+};
+
 class MpcSession final : public planner::PlannerSession {
  public:
   explicit MpcSession(const Config& config);
@@ -83,6 +96,7 @@ class MpcSession final : public planner::PlannerSession {
   /// The shifted plan while fresh, else the unfinished last solve, else a cold guess.
   [[nodiscard]] MpcPlan starting_point(int step, const Scenario& scene) const;
 
+  MpcRolloutTurn turn_;  // first: taken before, released after everything else
   const Config& config_;
   planner::LaneKeeper keeper_;
   MpcSolver solver_;

@@ -1,6 +1,9 @@
 #include <gtest/gtest.h>
 
+#include <atomic>
+#include <chrono>
 #include <cmath>
+#include <future>
 #include <nlohmann/json.hpp>
 #include <random>
 
@@ -133,6 +136,30 @@ TEST(Mpc, ChangesLanesIntoAWideOpenGap) {
   EXPECT_FALSE(r.trajectory.collision);
   EXPECT_GT(r.manoeuvre_over_at, 0.0);
   EXPECT_EQ(r.metrics.fallbacks, 0);
+}
+
+// Two threads' rollouts must not wait for each other's Ipopt solves inside
+// their timed steps: a second thread's session waits at its start until
+// the first session ends. One thread's own sessions do not wait for
+// themselves.
+TEST(Mpc, SessionsOnOtherThreadsWaitForTheirTurnAtTheStart) {
+  const Config config = untimed_mpc_config();
+  const auto mpc = baselines::make_planner("mpc", config);
+  const Scenario scene = testing::open_road_scenario();
+  auto first = mpc->start(scene);
+  auto nested = mpc->start(scene);  // the same thread: no deadlock
+  std::atomic<bool> started{false};
+  auto other = std::async(std::launch::async, [&] {
+    const auto session = mpc->start(scene);
+    started = true;
+  });
+  EXPECT_EQ(other.wait_for(std::chrono::milliseconds(100)), std::future_status::timeout);
+  EXPECT_FALSE(started);
+  nested.reset();
+  EXPECT_EQ(other.wait_for(std::chrono::milliseconds(50)), std::future_status::timeout);
+  first.reset();
+  other.get();
+  EXPECT_TRUE(started);
 }
 
 TEST(Mpc, StaysInItsLaneWithoutCollisionWhereThereIsNoGap) {
