@@ -109,6 +109,8 @@ void add_dagger_options(CLI::App& cmd, TrainArgs& a) {
                      "Adam's learning rate in the retrains (0: round 0's)"),
       cmd.add_flag("--dagger-fine-tune", d.fine_tune,
                    "Each retrain starts from the last round's network and its standardizers"),
+      cmd.add_flag("--dagger-average", d.average,
+                   "Round r's policy is the mean action of the networks of rounds 0..r"),
       cmd.add_flag("--dagger-validate-all", d.validate_on_dagger,
                    "Early stopping of a retrain also on DAgger rows (the first version)"),
       cmd.add_option("--dagger-candidates", d.candidates,

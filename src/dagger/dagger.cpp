@@ -111,6 +111,7 @@ json run_parameters(const DaggerOptions& o) {
   // Only when on: the runs from before the option resume as before.
   if (o.label_lookahead) p["label_lookahead"] = true;
   if (o.fixed_strategy) p["fixed_strategy"] = true;
+  if (o.average) p["average"] = true;
   if (o.retrain_learning_rate > 0.0) p["retrain_learning_rate"] = o.retrain_learning_rate;
   if (o.candidates > 1) {
     p["candidates"] = o.candidates;
@@ -359,6 +360,7 @@ void retrain(const DaggerOptions& o, int round, const std::string& out,
   retrain.validate_on_added = o.validate_on_dagger;
   retrain.network_seed_offset = network_seed_offset;
   if (o.fine_tune) retrain.warm_start = model_dir(o, round - 1);
+  if (o.average) retrain.average_with = model_dir(o, round - 1);
   retrain.note = {{"dagger_round", round}, {"data", data_dir(o)}};
   (void)learn::retrain_network(retrain);
 }

@@ -73,7 +73,7 @@ Model Model::load(const std::string& dir, const ModelRequirements& requirements)
     }
     const json policy = lanechange::detail::read_json_file(
         (fs::path(dir) / d.at("network").at("policy").get<std::string>()).string());
-    m.policy_ = std::make_shared<const Policy>(PolicyWeights::from_json(policy));
+    m.policy_ = std::make_shared<const Policy>(policy_members_from_json(policy));
     m.metrics_ = lanechange::detail::read_json_file((fs::path(dir) / "metrics.json").string());
     if (d.contains("strategy")) {
       const std::string file = d.at("strategy").at("file").get<std::string>();

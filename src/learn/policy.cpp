@@ -1,5 +1,7 @@
 #include "lanechange/learn/policy.hpp"
 
+#include <algorithm>
+
 #include "lanechange/error.hpp"
 
 namespace lanechange::learn {
@@ -73,7 +75,21 @@ PolicyWeights PolicyWeights::from_json(const json& j) {
   return p;
 }
 
-Policy::Policy(const PolicyWeights& p) {
+std::vector<PolicyWeights> policy_members_from_json(const json& j) {
+  if (!j.contains("average_of")) return {PolicyWeights::from_json(j)};
+  std::vector<PolicyWeights> members;
+  for (const json& member : j.at("average_of")) members.push_back(PolicyWeights::from_json(member));
+  return members;
+}
+
+json policy_members_to_json(const std::vector<PolicyWeights>& members) {
+  if (members.size() == 1) return members.front().to_json();
+  json all = json::array();
+  for (const PolicyWeights& member : members) all.push_back(member.to_json());
+  return {{"average_of", all}};
+}
+
+Policy::Network::Network(const PolicyWeights& p) {
   const auto n = static_cast<Eigen::Index>(p.inputs.size());
   require_shape(n > 0 && n <= kMaxPolicyInputs && p.input_mean.size() == n &&
                     p.input_scale.size() == n && p.output_mean.size() == kActions &&
@@ -90,46 +106,70 @@ Policy::Policy(const PolicyWeights& p) {
     require_shape(w.rows() == rows && w.cols() == cols &&
                       p.biases[static_cast<std::size_t>(l)].size() == rows,
                   "layer " + std::to_string(l));
-    weights_[static_cast<std::size_t>(l)] = w;
-    biases_[static_cast<std::size_t>(l)] = p.biases[static_cast<std::size_t>(l)];
+    weights[static_cast<std::size_t>(l)] = w;
+    biases[static_cast<std::size_t>(l)] = p.biases[static_cast<std::size_t>(l)];
   }
-  in_mean_ = p.input_mean;
-  in_inverse_scale_ = p.input_scale.cwiseInverse();
-  out_mean_ = p.output_mean;
-  out_scale_ = p.output_scale;
+  in_mean = p.input_mean;
+  in_inverse_scale = p.input_scale.cwiseInverse();
+  out_mean = p.output_mean;
+  out_scale = p.output_scale;
+}
+
+Policy::Policy(const PolicyWeights& weights) : members_{Network(weights)} {}
+
+Policy::Policy(const std::vector<PolicyWeights>& members) {
+  if (members.empty()) throw InputError("network", "a policy needs at least one network");
+  for (const PolicyWeights& m : members) {
+    if (m.inputs != members.front().inputs || m.outputs != members.front().outputs) {
+      throw InputError("network", "the averaged networks take other inputs or give other outputs");
+    }
+    members_.emplace_back(m);
+  }
+}
+
+int Policy::width() const {
+  int widest = 0;
+  for (const Network& n : members_) widest = std::max(widest, n.width());
+  return widest;
 }
 
 Eigen::Vector2d Policy::act(const Observation& observation) const {
-  if (observation.size() != in_mean_.size()) {
+  if (observation.size() != members_.front().in_mean.size()) {
     throw InputError("observation", "has " + std::to_string(observation.size()) +
-                                        " values; the policy takes " +
-                                        std::to_string(in_mean_.size()));
+                                        " values; the policy takes " + std::to_string(inputs()));
   }
+  if (members_.size() == 1) return members_.front().act(observation);
+  Eigen::Vector2d sum = Eigen::Vector2d::Zero();
+  for (const Network& n : members_) sum += n.act(observation);
+  return sum / static_cast<double>(members_.size());
+}
+
+Eigen::Vector2d Policy::Network::act(const Observation& observation) const {
   // Single precision as in training; Eigen vectorises tanh for floats.
   // Into bounded vectors: no heap. Up to kLazyWidth the coefficient-wise
   // (lazy) product is faster, since the GEMV kernel's set-up costs as much
   // as such a layer; above it the kernel wins (BM_PolicyAct/10, /32, /64).
-  const Observation z = (observation - in_mean_).cwiseProduct(in_inverse_scale_);
+  const Observation z = (observation - in_mean).cwiseProduct(in_inverse_scale);
   const bool lazy = width() <= kLazyWidth;
-  auto multiply = [lazy](const Eigen::MatrixXf& weights, const auto& in, Hidden& out) {
+  auto multiply = [lazy](const Eigen::MatrixXf& w, const auto& in, Hidden& out) {
     if (lazy) {
-      out.noalias() = weights.lazyProduct(in);
+      out.noalias() = w.lazyProduct(in);
     } else {
-      out.noalias() = weights * in;
+      out.noalias() = w * in;
     }
   };
   Hidden h(width());
   Hidden next(width());
-  multiply(weights_[0], z.cast<float>(), h);
-  h = (h + biases_[0]).array().tanh().matrix();
+  multiply(weights[0], z.cast<float>(), h);
+  h = (h + biases[0]).array().tanh().matrix();
   for (std::size_t l = 1; l < kHiddenLayers; ++l) {
-    multiply(weights_[l], h, next);
-    h = (next + biases_[l]).array().tanh().matrix();
+    multiply(weights[l], h, next);
+    h = (next + biases[l]).array().tanh().matrix();
   }
   Eigen::Vector2f out;
-  out.noalias() = weights_.back().lazyProduct(h);
-  const Eigen::Vector2d y = (out + biases_.back()).cast<double>();
-  return out_mean_ + y.cwiseProduct(out_scale_);
+  out.noalias() = weights.back().lazyProduct(h);
+  const Eigen::Vector2d y = (out + biases.back()).cast<double>();
+  return out_mean + y.cwiseProduct(out_scale);
 }
 
 }  // namespace lanechange::learn

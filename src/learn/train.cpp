@@ -82,6 +82,7 @@ struct Context {
   json metrics;
   std::vector<char> validation_pool;  // rows that may validate; empty: every one
   std::string warm_start;             // model directory to start the network from; empty: none
+  std::string average_with;           // model directory whose policy's networks the new one joins
 
   void say(const std::string& line) const {
     if (options.progress != nullptr) *options.progress << "train: " << line << std::endl;
@@ -233,8 +234,11 @@ std::pair<Standardizer, Standardizer> network_standardizers(const Context& c,
                                                             const Eigen::MatrixXd& fit_in,
                                                             const Eigen::MatrixXd& fit_out) {
   if (c.warm_start.empty()) return {Standardizer::fit(fit_in), Standardizer::fit(fit_out)};
-  const PolicyWeights w = PolicyWeights::from_json(
-      lanechange::detail::read_json_file((fs::path(c.warm_start) / "policy.json").string()));
+  // The warm start's network.dlib is its newest network, the last member.
+  const PolicyWeights w =
+      policy_members_from_json(
+          lanechange::detail::read_json_file((fs::path(c.warm_start) / "policy.json").string()))
+          .back();
   if (w.inputs != c.data.action_inputs || w.outputs != c.data.action_targets) {
     throw InputError(c.warm_start, "its network has other inputs or outputs than the data's");
   }
@@ -272,12 +276,22 @@ void train_action_network(Context& c) {
   PolicyWeights w{c.data.action_inputs, c.data.action_targets, in_norm.mean, in_norm.scale,
                   out_norm.mean,        out_norm.scale,        {},           {}};
   net.export_layers(w.weights, w.biases);
-  lanechange::detail::write_file_atomically((c.dir / "policy.json").string(), w.to_json().dump());
+  std::vector<PolicyWeights> members;
+  if (!c.average_with.empty()) {
+    members = policy_members_from_json(
+        lanechange::detail::read_json_file((fs::path(c.average_with) / "policy.json").string()));
+  }
+  members.push_back(w);
+  const Policy policy(members);  // InputError for networks of other inputs
+  lanechange::detail::write_file_atomically((c.dir / "policy.json").string(),
+                                            policy_members_to_json(members).dump());
   net.save((c.dir / "network.dlib").string());
   detail::write_loss_csv(net.curve, (c.dir / "loss.csv").string());
   if (c.options.plots) detail::plot_loss(net.curve, net.best_epoch, (c.dir / "loss.png").string());
 
-  json m = policy_errors(Policy(w), s, test, c.data.action_targets);
+  // The errors are the policy's: the members' mean where it averages.
+  json m = policy_errors(policy, s, test, c.data.action_targets);
+  m["members"] = members.size();
   m["epochs"] = net.curve.size();
   m["best_epoch"] = net.best_epoch;
   m["best_validation_mse"] = net.curve[static_cast<std::size_t>(net.best_epoch - 1)].validation_mse;
@@ -424,8 +438,8 @@ TrainReport train_models(const TrainOptions& options) {
   const Split split = split_scenarios(data.scenarios.rows(), options.test_share, options.seed);
   const auto [out, staging] = staging_for(options.out_dir);
   fs::create_directories(staging);
-  Context c{options,        data, split, Seeds(options.seed), staging, json::object(),
-            json::object(), {},   {}};
+  Context c{options, data, split, Seeds(options.seed), staging, json::object(), json::object(),
+            {},      {},   {}};
   return build_and_publish(c, out, start, [&] {
     c.say("read " + std::to_string(data.scenarios.rows()) + " scenarios and " +
           std::to_string(data.samples.rows()) + " well-posed samples from " +
@@ -505,14 +519,23 @@ TrainReport retrain_network(const RetrainOptions& options) {
   std::vector<char> pool = options.validate_on_added ? std::vector<char>{} : split.base_rows;
   Seeds seeds(train.seed);
   seeds.network += options.network_seed_offset;
-  Context c{
-      train, data, split.split, seeds, staging, base, metrics, std::move(pool), options.warm_start};
+  Context c{train,
+            data,
+            split.split,
+            seeds,
+            staging,
+            base,
+            metrics,
+            std::move(pool),
+            options.warm_start,
+            options.average_with};
   return build_and_publish(c, out, start, [&] {
     fs::copy(options.base_model, staging, fs::copy_options::recursive);
     train_action_network(c);
     c.model["data"] = describe_data(c);
     c.model["retrained_network"] = {{"base_model", options.base_model},
                                     {"warm_start", options.warm_start},
+                                    {"average_with", options.average_with},
                                     {"network_seed", seeds.network},
                                     {"note", options.note}};
     c.metrics["data"]["samples_network"] = data.samples.rows();

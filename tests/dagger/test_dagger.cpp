@@ -466,6 +466,43 @@ TEST_F(DaggerCli, TheRetrainsLearnAtTheirOwnRate) {
   EXPECT_GT(largest_move(""), 10.0 * vanishing + 1e-3);
 }
 
+// With --dagger-average, round r's policy averages the networks of rounds
+// 0..r: each round adds its own network to the last round's members, and a
+// fine-tune goes on from that newest network.
+TEST_F(DaggerCli, AveragedRoundsAddTheirNetworkToTheLastRoundsMembers) {
+  const std::string work = dir_.file("work");
+  const auto run = train("--dagger 2 --dagger-average --dagger-fine-tune --dagger-dir " + work +
+                         " --dagger-scenes 6 --dagger-stride 2 --dagger-eval-count 2");
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  const auto members_of = [&](int round) {
+    return learn::policy_members_from_json(nlohmann::json::parse(
+        testing::read_text(work + "/model-" + std::to_string(round) + "/policy.json")));
+  };
+  const auto round0 = members_of(0);
+  const auto round1 = members_of(1);
+  const auto round2 = members_of(2);
+  ASSERT_EQ(round0.size(), 1U);
+  ASSERT_EQ(round1.size(), 2U);
+  ASSERT_EQ(round2.size(), 3U);
+  EXPECT_EQ(round1[0].to_json(), round0[0].to_json());
+  EXPECT_EQ(round2[0].to_json(), round0[0].to_json());
+  EXPECT_EQ(round2[1].to_json(), round1[1].to_json());
+  EXPECT_NE(round2[2].to_json(), round1[1].to_json());
+  // The fine-tune starts from the newest member, under its standardizers.
+  EXPECT_EQ(round2[2].input_mean, round1[1].input_mean);
+  // What mlp-miqp loads is the average.
+  const learn::Model model = learn::Model::load(work + "/model-2");
+  EXPECT_EQ(model.policy().members(), 3);
+  const auto data = learn::load_learning_data({data_});
+  const learn::Observation x = data.samples.inputs.row(0).transpose();
+  Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+  for (const auto& m : round2) mean += learn::Policy(m).act(x) / 3.0;
+  EXPECT_NEAR((model.policy().act(x) - mean).cwiseAbs().maxCoeff(), 0.0, 1e-9);
+  const auto metrics =
+      nlohmann::json::parse(testing::read_text(work + "/model-2/metrics.json")).at("network");
+  EXPECT_EQ(metrics.at("members").get<int>(), 3);
+}
+
 // With candidates, a round retrains once per network seed, measures each on
 // the selection scenes and keeps the one with the fewest take-overs there.
 TEST_F(DaggerCli, ARoundKeepsTheRetrainWithTheFewestTakeOversOnTheSelectionScenes) {

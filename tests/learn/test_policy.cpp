@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <random>
 
 #include "lanechange/error.hpp"
@@ -139,6 +140,59 @@ TEST(Policy, RefusesWeightsOfAnotherShapeAndObservationsOfAnotherSize) {
   EXPECT_THROW(Policy{uneven}, InputError);
   w.weights.pop_back();
   EXPECT_THROW(Policy{w}, InputError);
+}
+
+PolicyWeights trained_weights(const Toy& t, std::uint64_t seed, double output_mean) {
+  NetworkSettings s = few_epochs();
+  s.max_epochs = 2;
+  s.seed = seed;
+  const TrainedNetwork net = train_network(t.x, t.y, t.train, t.validation, s);
+  const auto n = static_cast<Eigen::Index>(t.x.cols());
+  PolicyWeights w;
+  for (Eigen::Index i = 0; i < n; ++i) w.inputs.push_back(std::to_string(i));
+  w.outputs = {"a", "omega"};
+  w.input_mean = Eigen::VectorXd::Constant(n, 0.1 * static_cast<double>(seed));
+  w.input_scale = Eigen::VectorXd::Constant(n, 1.0 + static_cast<double>(seed));
+  w.output_mean = Eigen::Vector2d(output_mean, -output_mean);
+  w.output_scale = Eigen::Vector2d(2.0, 0.5);
+  net.export_layers(w.weights, w.biases);
+  return w;
+}
+
+// An averaged policy acts as the mean of its networks, each under its own
+// standardizers, and keeps that through its file.
+TEST(Policy, AnAverageActsAsTheMeanOfItsNetworksAndReadsBackAsWritten) {
+  const Toy t = toy(5, 7);
+  const std::vector<PolicyWeights> members = {
+      trained_weights(t, 1, 0.0), trained_weights(t, 2, 1.0), trained_weights(t, 3, -0.5)};
+  const nlohmann::json file = nlohmann::json::parse(policy_members_to_json(members).dump());
+  ASSERT_TRUE(file.contains("average_of"));
+  const Policy average(policy_members_from_json(file));
+  EXPECT_EQ(average.members(), 3);
+  EXPECT_EQ(average.inputs(), 5);
+  // One network is written as before, so older readers read it.
+  EXPECT_FALSE(policy_members_to_json({members[0]}).contains("average_of"));
+  EXPECT_EQ(Policy(policy_members_from_json(members[0].to_json())).members(), 1);
+  double spread = 0.0;
+  for (int r = 0; r < 40; ++r) {
+    const Observation x = t.x.row(r).transpose();
+    Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+    for (const PolicyWeights& m : members) mean += Policy(m).act(x) / 3.0;
+    const Eigen::Vector2d got = average.act(x);
+    EXPECT_NEAR(got(0), mean(0), 1e-9);
+    EXPECT_NEAR(got(1), mean(1), 1e-9);
+    spread = std::max(spread, (Policy(members[1]).act(x) - got).cwiseAbs().maxCoeff());
+  }
+  EXPECT_GT(spread, 1e-3);  // the members differ, so the mean is not any one of them
+}
+
+TEST(Policy, AnAverageOfNoNetworkOrOfNetworksWithOtherInputsIsRefused) {
+  const Toy t = toy(5, 8);
+  EXPECT_THROW(Policy{std::vector<PolicyWeights>{}}, InputError);
+  PolicyWeights renamed = trained_weights(t, 2, 0.0);
+  renamed.inputs[4] = "another";
+  EXPECT_THROW((Policy{std::vector<PolicyWeights>{trained_weights(t, 1, 0.0), renamed}}),
+               InputError);
 }
 
 }  // namespace

@@ -64,6 +64,12 @@ struct DaggerOptions {
   /// Each round's retrain starts from the last round's network and keeps
   /// round 0's standardizers, instead of fresh weights on refitted ones.
   bool fine_tune = false;
+  /// Round r's policy is the mean action of the networks of rounds 0..r
+  /// (each retrained as without it), so that it rolls out and is scored as
+  /// that average. DAgger's guarantee (Ross et al. 2011) holds for the best
+  /// round or the mixture of the rounds' policies; the average is the
+  /// mixture's deterministic form, and it damps the retrains' own scatter.
+  bool average = false;
   /// Adam's learning rate in the retrains; 0: round 0's. A fine-tune at a
   /// smaller rate stays nearer the last round's network.
   double retrain_learning_rate = 0.0;

@@ -62,6 +62,11 @@ struct RetrainOptions {
   /// standardizers (DAgger's rounds fine-tune the last round's network);
   /// empty: fresh weights and standardizers fitted on all training rows.
   std::string warm_start;
+  /// A model directory whose policy's networks (one, or the several it
+  /// averages) the new network joins: the published policy is the mean
+  /// action of them all (DAgger's --dagger-average); empty: the new network
+  /// alone. network.dlib stays the new network.
+  std::string average_with;
   /// Offset added to the network's seed (its initial weights, or a
   /// fine-tune's batch order); the splits stay the base's. 0: the base's own.
   std::uint64_t network_seed_offset = 0;
