@@ -5,6 +5,7 @@
 #include <benchmark/benchmark.h>
 
 #include <random>
+#include <vector>
 
 #include "lanechange/learn/classifier.hpp"
 #include "lanechange/learn/learn_data.hpp"
@@ -61,6 +62,26 @@ BENCHMARK(BM_PolicyAct)
     ->Arg(lc::kMaxHiddenWidth)
     ->Repetitions(5)
     ->ReportAggregatesOnly(true);
+
+// A policy averaging the networks of DAgger's rounds 0..r (--dagger-average):
+// the argument is how many 10-wide networks it holds.
+void BM_PolicyActAverage(benchmark::State& state) {
+  std::vector<lc::PolicyWeights> members;
+  for (int m = 0; m < state.range(0); ++m) {
+    lc::PolicyWeights w = random_policy(lc::kHiddenWidth);
+    w.output_mean(0) = 0.1 * m;  // members that differ
+    members.push_back(w);
+  }
+  const lc::Policy policy(members);
+  lc::Observation obs = random_matrix(kInputs, 1, 3);
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(obs.data());
+    const Eigen::Vector2d a = policy.act(obs);
+    benchmark::DoNotOptimize(a.data());
+    obs(0) += 1e-9;
+  }
+}
+BENCHMARK(BM_PolicyActAverage)->Arg(1)->Arg(5)->Repetitions(5)->ReportAggregatesOnly(true);
 
 void BM_ClassifierDecision(benchmark::State& state) {
   const auto kind = lc::kClassifierKinds[static_cast<std::size_t>(state.range(0))];
