@@ -44,10 +44,8 @@ lc::PolicyWeights random_policy(int width) {
   return w;
 }
 
-// The argument is the hidden layers' width: the paper's 10 first (the
-// performance report reads that line), then wider ones (train --network-width).
-void BM_PolicyAct(benchmark::State& state) {
-  const lc::Policy policy(random_policy(static_cast<int>(state.range(0))));
+// One act per iteration, on an observation that changes a little each time.
+void time_act(benchmark::State& state, const lc::Policy& policy) {
   lc::Observation obs = random_matrix(kInputs, 1, 3);
   for (auto _ : state) {
     benchmark::DoNotOptimize(obs.data());
@@ -55,6 +53,13 @@ void BM_PolicyAct(benchmark::State& state) {
     benchmark::DoNotOptimize(a.data());
     obs(0) += 1e-9;
   }
+}
+
+// The argument is the hidden layers' width: the paper's 10 first (the
+// performance report reads that line), then wider ones (train --network-width).
+void BM_PolicyAct(benchmark::State& state) {
+  const lc::Policy policy(random_policy(static_cast<int>(state.range(0))));
+  time_act(state, policy);
 }
 BENCHMARK(BM_PolicyAct)
     ->Arg(lc::kHiddenWidth)
@@ -73,13 +78,7 @@ void BM_PolicyActAverage(benchmark::State& state) {
     members.push_back(w);
   }
   const lc::Policy policy(members);
-  lc::Observation obs = random_matrix(kInputs, 1, 3);
-  for (auto _ : state) {
-    benchmark::DoNotOptimize(obs.data());
-    const Eigen::Vector2d a = policy.act(obs);
-    benchmark::DoNotOptimize(a.data());
-    obs(0) += 1e-9;
-  }
+  time_act(state, policy);
 }
 BENCHMARK(BM_PolicyActAverage)->Arg(1)->Arg(5)->Repetitions(5)->ReportAggregatesOnly(true);
 
