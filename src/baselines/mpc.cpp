@@ -302,22 +302,18 @@ MpcResult MpcSolver::solve(MpcProblemData data, MpcPlan guess, double time_limit
 // timed steps, and a wait over the 100 ms budget hands the step to the
 // fallback: mpc's results depended on --jobs (docs/baselines.md). A session
 // therefore takes the turn when it starts, outside the steps, and keeps it
-// for its rollout. The other threads' planners run meanwhile.
+// for its rollout. The other threads' planners run meanwhile. Recursive: a
+// thread's nested sessions share the turn it holds.
 namespace {
-std::mutex& mpc_turn_mutex() {
-  static std::mutex m;
+std::recursive_mutex& mpc_turn_mutex() {
+  static std::recursive_mutex m;
   return m;
 }
-thread_local int mpc_turns_held = 0;
 }  // namespace
 
-MpcRolloutTurn::MpcRolloutTurn() {
-  if (mpc_turns_held++ == 0) mpc_turn_mutex().lock();
-}
+MpcRolloutTurn::MpcRolloutTurn() { mpc_turn_mutex().lock(); }
 
-MpcRolloutTurn::~MpcRolloutTurn() {
-  if (--mpc_turns_held == 0) mpc_turn_mutex().unlock();
-}
+MpcRolloutTurn::~MpcRolloutTurn() { mpc_turn_mutex().unlock(); }
 
 MpcSession::MpcSession(const Config& config)
     : config_(config), keeper_(config), solver_(config.mpc) {}
