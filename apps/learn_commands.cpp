@@ -107,6 +107,9 @@ void add_dagger_options(CLI::App& cmd, TrainArgs& a) {
                    "Label with the lane modes of the expert's plan from the scene's start fixed"),
       cmd.add_option("--dagger-learning-rate", d.retrain_learning_rate,
                      "Adam's learning rate in the retrains (0: round 0's)"),
+      cmd.add_option("--dagger-beta", d.beta,
+                     "Network rollouts: round r lets the expert act at each step with "
+                     "probability beta^r (Ross et al.'s mixing; 0: the network alone)"),
       cmd.add_flag("--dagger-fine-tune", d.fine_tune,
                    "Each retrain starts from the last round's network and its standardizers"),
       cmd.add_flag("--dagger-average", d.average,

@@ -82,7 +82,9 @@ class LearnerSession final : public planner::PlannerSession {
 
   [[nodiscard]] planner::Decision act(const planner::Observation& o) override {
     if (!gate_) {
-      if (o.step % labelling_.stride == 0) label(o);
+      const bool labelled = o.step % labelling_.stride == 0;
+      if (expert_turn()) return expert_decision(o, labelled);
+      if (labelled) label(o);
       return network_decision(o);
     }
     if (takeover_step_ < 0) {
@@ -110,6 +112,23 @@ class LearnerSession final : public planner::PlannerSession {
     return {learner_.network(o), planner::ActStatus::Planned, ""};
   }
 
+  // Drawn at every step, so that a scene's coins do not depend on who drove.
+  [[nodiscard]] bool expert_turn() {
+    return labelling_.expert_share > 0.0 && coin_.uniform(0.0, 1.0) < labelling_.expert_share;
+  }
+
+  // The expert acts as miqp would from this state without a warm start:
+  // its plan's first control, or the lane keeper where it found none.
+  [[nodiscard]] planner::Decision expert_decision(const planner::Observation& o, bool labelled) {
+    Query query = plan_at(o);
+    const Trajectory& path = query.outcome.trajectory;
+    const bool planned = query.outcome.status == expert::to_string(expert::PlanStatus::Converged) &&
+                         path.nodes() > 0;
+    const EgoControl u = planned ? path.controls[0] : planner::fallback_control(keeper_, o);
+    if (labelled) sink_.push_back(std::move(query));
+    return {u, planner::ActStatus::Planned, ""};
+  }
+
   [[nodiscard]] int past_takeover_steps(const planner::Observation& o) const {
     const double dt = o.scene->horizon / o.scene->steps;
     return static_cast<int>(std::lround(labelling_.past_takeover_s / dt));
@@ -127,19 +146,19 @@ class LearnerSession final : public planner::PlannerSession {
 
   // The call miqp's re-plan makes, from the scene as it is now, but
   // without a warm start: the learner's path is not the expert's.
-  void label(const planner::Observation& o) {
+  [[nodiscard]] Query plan_at(const planner::Observation& o) const {
     const Scenario now = planner::scene_now(o, learner_.config());
     if (strategy_) {
       auto fixed = strategy_->label(now, o.step, labelling_.time_limit_s);
       if (fixed && fixed->label == Label::WellPosed) {
-        sink_.push_back(first_nodes(std::move(*fixed), o.t, labelling_.nodes));
-        return;
+        return first_nodes(std::move(*fixed), o.t, labelling_.nodes);
       }
     }
-    sink_.push_back(
-        first_nodes(data::detail::plan_outcome(learner_.expert(), now, labelling_.time_limit_s),
-                    o.t, labelling_.nodes));
+    return first_nodes(data::detail::plan_outcome(learner_.expert(), now, labelling_.time_limit_s),
+                       o.t, labelling_.nodes);
   }
+
+  void label(const planner::Observation& o) { sink_.push_back(plan_at(o)); }
 
   const planner::MlpMiqpPlanner& learner_;
   const Labelling& labelling_;
@@ -147,6 +166,8 @@ class LearnerSession final : public planner::PlannerSession {
   std::unique_ptr<planner::PlannerSession> gate_;  ///< mlp-miqp's session when gated
   std::optional<StrategyLabeller> strategy_;       ///< Labelling::fixed_strategy
   int takeover_step_ = -1;                         ///< the gate's first take-over; -1: none yet
+  Rng coin_{labelling_.coin_seed};                 ///< Labelling::expert_share's draws
+  planner::LaneKeeper keeper_{learner_.config()};  ///< the expert's fallback, as miqp's
 };
 
 class LearnerPlanner final : public planner::ClosedLoopPlanner {
@@ -169,6 +190,11 @@ class LearnerPlanner final : public planner::ClosedLoopPlanner {
   const Labelling& labelling_;
   std::vector<Query>& sink_;
 };
+
+// Not the scene's own sub-seed, which drew the scene itself.
+std::uint64_t coin_seed(std::uint64_t scene_seed, std::uint64_t scene_index) {
+  return Rng(scenario_seed(scene_seed, scene_index) ^ 0xbe7a5eedULL).next();
+}
 
 }  // namespace
 
@@ -198,9 +224,12 @@ RoundData collect_round(const CollectJob& job, const std::string& dir, long long
   data::Progress progress(job.progress, false, job.scenes, -1.0, "dagger", "learner rollouts");
   auto work = [&] {
     for (long long i = next++; i < job.scenes; i = next++) {
-      const Scenario scene = sampler.sample(static_cast<std::uint64_t>(job.first_scene + i));
+      const auto scene_index = static_cast<std::uint64_t>(job.first_scene + i);
+      const Scenario scene = sampler.sample(scene_index);
+      Labelling labelling = job.labelling;
+      labelling.coin_seed = coin_seed(job.scene_seed, scene_index);
       per_scene[static_cast<std::size_t>(i)] =
-          collect_scene(scene, job.learner, job.config, job.labelling);
+          collect_scene(scene, job.learner, job.config, labelling);
       if (!rolled_out(scene, job.learner, job.labelling)) ++refused;
       progress.add(1);
     }

@@ -49,6 +49,14 @@ struct Labelling {
   /// search only where they leave no well-posed plan
   /// (DaggerOptions::label_strategy).
   bool fixed_strategy = false;
+  /// Ross et al.'s beta: at each step the network drives, the expert's own
+  /// control (its plan's first, or miqp's lane keeper where it has none)
+  /// acts instead with this probability; 0: the learner alone. Not with
+  /// `gated`, whose take-over already hands steps to the expert.
+  double expert_share = 0.0;
+  /// The coin's seed; collect_round draws one per scene from its sub-seed,
+  /// so a scene's mixture is the same whatever thread rolls it out.
+  std::uint64_t coin_seed = 0;
 };
 
 /// Rolls the learner's network out on `scene` (with mlp-miqp's take-over

@@ -63,6 +63,10 @@ void validate(const DaggerOptions& o) {
           "only goes with --dagger-rollout gated");
   require(!o.label_lookahead || o.rollout == Rollout::Gated, "--dagger-label-lookahead",
           "only goes with --dagger-rollout gated");
+  require(o.beta >= 0.0 && o.beta <= 1.0, "--dagger-beta", "must be in [0, 1]");
+  require(o.beta == 0.0 || o.rollout == Rollout::Network, "--dagger-beta",
+          "only goes with --dagger-rollout network: gated rollouts hand steps to the expert "
+          "at the take-over");
   require(o.retrain_learning_rate >= 0.0 && o.retrain_learning_rate <= 1.0,
           "--dagger-learning-rate", "must be in [0, 1] (0: round 0's)");
   require(o.eval_count >= 1, "--dagger-eval-count", "must be at least 1");
@@ -112,6 +116,7 @@ json run_parameters(const DaggerOptions& o) {
   if (o.label_lookahead) p["label_lookahead"] = true;
   if (o.fixed_strategy) p["fixed_strategy"] = true;
   if (o.average) p["average"] = true;
+  if (o.beta > 0.0) p["beta"] = o.beta;
   if (o.retrain_learning_rate > 0.0) p["retrain_learning_rate"] = o.retrain_learning_rate;
   if (o.candidates > 1) {
     p["candidates"] = o.candidates;
@@ -266,6 +271,12 @@ Aggregate read_aggregate(const DaggerOptions& o) {
   return a;
 }
 
+// Ross et al.'s beta_i = p^(i-1) with their first iteration our round 0,
+// the expert's own data.
+double expert_share(const DaggerOptions& o, int round) {
+  return o.beta > 0.0 ? std::pow(o.beta, round) : 0.0;
+}
+
 void add_round(Aggregate& a, const DaggerOptions& o, int round, std::ostream* progress) {
   const auto model =
       std::make_shared<const learn::Model>(learn::Model::load(model_dir(o, round - 1)));
@@ -279,7 +290,7 @@ void add_round(Aggregate& a, const DaggerOptions& o, int round, std::ostream* pr
       (round - 1) * o.scenes,
       o.scenes,
       {o.stride, o.label_nodes, o.label_time_limit_s, o.every_scene, o.rollout == Rollout::Gated,
-       o.past_takeover_s, o.label_lookahead, o.fixed_strategy},
+       o.past_takeover_s, o.label_lookahead, o.fixed_strategy, expert_share(o, round)},
       o.jobs,
       progress};
   const detail::RoundData got = detail::collect_round(job, data_dir(o), round - 1, a.count());
@@ -295,6 +306,9 @@ void add_round(Aggregate& a, const DaggerOptions& o, int round, std::ostream* pr
                                               {"scenes_refused", got.refused},
                                               {"well_posed_labels", got.labelled},
                                               {"well_posed_samples", got.samples}});
+  if (job.labelling.expert_share > 0.0) {
+    a.parameters["dagger"]["shards"].back()["expert_share"] = job.labelling.expert_share;
+  }
   a.parameters["count"] = a.count();
   char host[256] = {};
   (void)::gethostname(host, sizeof host - 1);

@@ -1,8 +1,10 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <optional>
 #include <sstream>
 
 #include "dagger/collect.hpp"
@@ -221,7 +223,8 @@ TEST(Dagger, GatedLabelsTakeTheFailedLookAheadToo) {
   const auto ahead = dagger::detail::collect_scene(scene, learner, config, labelling);
   ASSERT_GE(at.size(), 1U);
   ASSERT_GT(ahead.size(), at.size());
-  const auto lookahead_steps = static_cast<std::size_t>(config.closed_loop.lookahead / dt + 0.5);
+  const auto lookahead_steps =
+      static_cast<std::size_t>(std::lround(config.closed_loop.lookahead / dt));
   EXPECT_LE(ahead.size() - at.size(), lookahead_steps / stride);
   for (std::size_t i = 0; i < at.size(); ++i) {
     ASSERT_EQ(ahead[i].outcome.trajectory.nodes(), at[i].outcome.trajectory.nodes());
@@ -241,6 +244,67 @@ TEST(Dagger, GatedLabelsTakeTheFailedLookAheadToo) {
     EXPECT_GT(p.ego[0].y, last_y) << j;
     last_y = p.ego[0].y;
   }
+}
+
+// The states a rollout labels, in order (nodes 0; none where no plan).
+std::vector<std::optional<EgoState>> visited(const std::vector<dagger::detail::Query>& queries) {
+  std::vector<std::optional<EgoState>> out;
+  for (const auto& q : queries) {
+    const Trajectory& path = q.outcome.trajectory;
+    out.push_back(path.nodes() > 0 ? std::optional(path.ego[0]) : std::nullopt);
+  }
+  return out;
+}
+
+bool same_states(const std::vector<std::optional<EgoState>>& a,
+                 const std::vector<std::optional<EgoState>>& b) {
+  return std::equal(a.begin(), a.end(), b.begin(), b.end(), [](const auto& p, const auto& q) {
+    return p.has_value() == q.has_value() && (!p || (p->x == q->x && p->y == q->y));
+  });
+}
+
+// Ross et al.'s mixture at beta = 1 is the expert alone: replaying its
+// labels' controls (the lane keeper's where it had no plan) as the network's
+// visits the very same states, and none of the network's own.
+TEST(Dagger, AtExpertShareOneTheExpertDrivesEveryStep) {
+  const auto [config, learner, scene, dt] = SteeringLeft{};
+  dagger::detail::Labelling mixed{1, 1, 60.0};
+  mixed.expert_share = 1.0;
+  const auto expert_driven = dagger::detail::collect_scene(scene, learner, config, mixed);
+  ASSERT_GE(expert_driven.size(), 3U);
+  const planner::LaneKeeper keeper(config);
+  const planner::MlpMiqpPlanner replay(
+      config, [](const Scenario&) { return static_cast<int>(Label::WellPosed); },
+      [&](const planner::Observation& o) {
+        const auto step = static_cast<std::size_t>(o.step);
+        if (step >= expert_driven.size()) return EgoControl{0.0, 0.0};
+        const auto& outcome = expert_driven[step].outcome;
+        const bool planned = outcome.status == "converged" && outcome.trajectory.nodes() > 0;
+        return planned ? outcome.trajectory.controls[0] : planner::fallback_control(keeper, o);
+      },
+      std::make_shared<expert::FastLaneChangeSolver>());
+  const auto replayed = dagger::detail::collect_scene(scene, replay, config, {1, 1, 60.0});
+  EXPECT_TRUE(same_states(visited(expert_driven), visited(replayed)));
+  const auto network_driven = dagger::detail::collect_scene(scene, learner, config, {1, 1, 60.0});
+  EXPECT_FALSE(same_states(visited(expert_driven), visited(network_driven)));
+}
+
+// Between the two, a seeded coin picks the driver at every step: the same
+// seed gives the same rollout, another seed another, and neither is the
+// pure network's or the pure expert's.
+TEST(Dagger, APartialExpertShareMixesTheDriversByASeededCoin) {
+  const SteeringLeft left;
+  const auto run = [&left](double share, std::uint64_t seed) {
+    dagger::detail::Labelling labelling{1, 1, 60.0};
+    labelling.expert_share = share;
+    labelling.coin_seed = seed;
+    return visited(dagger::detail::collect_scene(left.scene, left.learner, left.config, labelling));
+  };
+  const auto half = run(0.5, 1);
+  EXPECT_TRUE(same_states(half, run(0.5, 1)));
+  EXPECT_FALSE(same_states(half, run(0.5, 2)));
+  EXPECT_FALSE(same_states(half, run(0.0, 1)));
+  EXPECT_FALSE(same_states(half, run(1.0, 1)));
 }
 
 // mlp-miqp never lets the network drive a scene its classifier refuses, so
@@ -505,6 +569,25 @@ TEST_F(DaggerCli, AveragedRoundsAddTheirNetworkToTheLastRoundsMembers) {
 
 // With candidates, a round retrains once per network seed, measures each on
 // the selection scenes and keeps the one with the fewest take-overs there.
+// Round r lets the expert act with probability beta^r; the aggregated data
+// set records each round's share and stays a data set.
+TEST_F(DaggerCli, MixedRoundsRecordTheirExpertShareInTheDataSet) {
+  const std::string work = dir_.file("work");
+  const auto run = train("--dagger 2 --dagger-beta 0.5 --dagger-dir " + work +
+                         " --dagger-scenes 6 --dagger-stride 2 --dagger-eval-count 2");
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  const auto manifest = nlohmann::json::parse(testing::read_text(work + "/data/manifest.json"));
+  const auto& shards = manifest.at("parameters").at("dagger").at("shards");
+  ASSERT_EQ(shards.size(), 2U);
+  EXPECT_DOUBLE_EQ(shards[0].at("expert_share").get<double>(), 0.5);
+  EXPECT_DOUBLE_EQ(shards[1].at("expert_share").get<double>(), 0.25);
+  EXPECT_EQ(testing::run_cli("dataset-info " + work + "/data").exit_code, 0);
+  // Another beta is another run: a resume with it is refused.
+  const auto other = train("--dagger 2 --dagger-beta 0.7 --dagger-dir " + work +
+                           " --dagger-scenes 6 --dagger-stride 2 --dagger-eval-count 2");
+  EXPECT_EQ(other.exit_code, 2) << other.output;
+}
+
 TEST_F(DaggerCli, ARoundKeepsTheRetrainWithTheFewestTakeOversOnTheSelectionScenes) {
   const std::string work = dir_.file("work");
   const auto run = train("--dagger 1 --dagger-dir " + work +
@@ -557,6 +640,10 @@ TEST_F(DaggerCli, BadOptionsAreRefusedAndWriteNothing) {
                           "--dagger-rollout gated",
                           "--dagger 1 --dagger-past-takeover 1",
                           "--dagger 1 --dagger-label-lookahead",
+                          "--dagger 1 --dagger-beta -0.1",
+                          "--dagger 1 --dagger-beta 1.5",
+                          "--dagger 1 --dagger-rollout gated --dagger-beta 0.5",
+                          "--dagger-beta 0.5",
                           "--dagger 1 --dagger-learning-rate -1",
                           "--dagger 1 --dagger-learning-rate 2",
                           "--dagger 1 --dagger-candidates 0",
@@ -565,8 +652,7 @@ TEST_F(DaggerCli, BadOptionsAreRefusedAndWriteNothing) {
                           "--dagger 1 --dagger-candidates 2 --dagger-select-seed 7001",
                           "--dagger 1 --dagger-candidates 2 --dagger-select-count 0",
                           "--dagger-candidates 2",
-                          "--dagger 1 --dagger-rollout gated "
-                          "--dagger-past-takeover -1"}) {
+                          "--dagger 1 --dagger-rollout gated --dagger-past-takeover -1"}) {
     std::string options = bad;
     options += " --dagger-dir ";
     options += work;

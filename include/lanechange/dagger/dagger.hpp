@@ -70,6 +70,12 @@ struct DaggerOptions {
   /// round or the mixture of the rounds' policies; the average is the
   /// mixture's deterministic form, and it damps the retrains' own scatter.
   bool average = false;
+  /// Ross et al.'s mixing (network rollouts only): round r's rollouts let
+  /// the expert act at each step with probability beta^r and the last
+  /// round's network otherwise, so that the early rounds' states stay nearer
+  /// the expert's own. 0: the network alone from round 1 (beta_r = 0 for
+  /// r >= 1, the form Ross et al. found best in practice).
+  double beta = 0.0;
   /// Adam's learning rate in the retrains; 0: round 0's. A fine-tune at a
   /// smaller rate stays nearer the last round's network.
   double retrain_learning_rate = 0.0;
