@@ -660,7 +660,12 @@ LaneChangeSolution FastLaneChangeSolver::solve(const LaneChangeQp& qp, const Miq
     // Nothing beats the root relaxation: once an incumbent is within the gap
     // of it, the search is over (in later rounds the hint is usually there).
     const double root_bound = root.objective;
-    auto settled = [&] { return root_bound >= prune_above(incumbent, settings); };
+    // Out of time, the search below returns at once: the heuristics must not
+    // run on past the limit either (a real-time step budget).
+    auto settled = [&] {
+      return root_bound >= prune_above(incumbent, settings) ||
+             std::chrono::duration<double>(Clock::now() - start).count() > settings.time_limit_s;
+    };
     std::vector<std::pair<double, std::vector<int>>> starts;
     std::vector<int> rounded = rounded_modes(qp, *ws, root.path);
     if (hints.modes != nullptr && static_cast<int>(hints.modes->size()) == n + 1) {

@@ -137,11 +137,18 @@ struct RoundSolution {
 // point when finite). Updates the prediction the result reports.
 RoundSolution solve_round(const RoundContext& c, const Iterate& point, double radius,
                           ExpertResult& result) {
+  MiqpSettings settings;
+  settings.time_limit_s = c.time_limit_s - elapsed_ms(c.start) / 1000.0;
+  if (settings.time_limit_s <= 0.0) {
+    // A round begun past the limit would overrun it by a whole MIQP.
+    RoundSolution late;
+    late.solution.status = MiqpStatus::TimeLimit;
+    late.solution.message = "no time left for the round";
+    return late;
+  }
   LaneChangeQp qp =
       linearized_qp(c.scenario, c.config, c.predicted_steps, c.dt, point, result.prediction);
   if (std::isfinite(radius)) restrict_to_box(qp, point, radius);
-  MiqpSettings settings;
-  settings.time_limit_s = std::max(0.001, c.time_limit_s - elapsed_ms(c.start) / 1000.0);
   // The previous round's lane modes (the warm start's, first) are a good
   // first guess; the back-end proves or improves on them.
   std::vector<int> mode_hint = result.modes;

@@ -16,6 +16,11 @@ using expert::ExpertResult;
 using expert::Iterate;
 using expert::PlanStatus;
 
+// Of the step budget, the expert leaves this much for the rest of the step:
+// the check that called it (mlp-miqp), and the node QP or round that is
+// running when its time limit passes, which it finishes before it returns.
+constexpr double kStepReserveMs = 3.0;
+
 }  // namespace
 
 Iterate shifted(const Iterate& path, int by, int steps, double dt) {
@@ -109,8 +114,8 @@ std::string MiqpSession::replan(const Observation& o) {
     workspace_step_ = o.step;
     hints.workspace = workspace_.get();
   }
-  const ExpertResult result =
-      plan_function_(scene, {config_.closed_loop.step_budget_ms / 1000.0}, hints);
+  const ExpertResult result = plan_function_(
+      scene, {std::max(0.0, config_.closed_loop.step_budget_ms - kStepReserveMs) / 1000.0}, hints);
   last_plan_ms_ = result.total_ms;
   last_status_ = result.status;
   if (result.status != PlanStatus::Converged) {

@@ -367,8 +367,10 @@ StrategyPlan StrategyQpPlanner::plan(const Scenario& scene, const expert::PlanLi
   if (out.chosen < 0) {
     // No candidate holds: the exact search, started from the likeliest modes.
     if (rescued_hint.empty() && !list.empty()) rescued_hint = list.front().modes;
+    // Only what the candidates left of the limit: a step budget is one budget.
+    const expert::PlanLimits left{std::max(0.0, limits.time_limit_s - ms_since(start) / 1000.0)};
     out.result = exact_.plan(
-        scene, limits,
+        scene, left,
         {hints.path, rescued_hint.empty() ? nullptr : &rescued_hint, hints.path_is_plan});
     out.qp_iterations += qp_iterations_of(out.result);
   }

@@ -542,6 +542,55 @@ TEST(Planner, AFirstRoundOnAPlanConvergesThere) {
   EXPECT_NEAR(from_guess.objective, plan.objective, 1e-3 * (1.0 + plan.objective));
 }
 
+// The fast solver, counting its solves.
+class CountingSolver final : public LaneChangeSolver {
+ public:
+  [[nodiscard]] std::string_view name() const override { return "counting"; }
+  [[nodiscard]] std::unique_ptr<LaneChangeWorkspace> make_workspace() const override {
+    return fast_.make_workspace();
+  }
+  [[nodiscard]] LaneChangeSolution solve(const LaneChangeQp& qp, const MiqpSettings& settings,
+                                         const SolveHints& hints) const override {
+    ++solves;
+    return fast_.solve(qp, settings, hints);
+  }
+  mutable int solves = 0;
+
+ private:
+  FastLaneChangeSolver fast_;
+};
+
+// Under a step budget the expert must return at its limit: a round begun
+// with no time left is not solved at all (it used to get a millisecond,
+// and with it the chance to overrun by a whole MIQP).
+TEST(Planner, ARoundBegunPastTheTimeLimitIsNotSolved) {
+  const Scenario s = open_road_scenario(Behavior::ConstantSpeed);
+  const auto solver = std::make_shared<CountingSolver>();
+  const ExpertPlanner planner(Config{}, solver);
+  const ExpertResult late = planner.plan(s, {0.0});
+  EXPECT_EQ(late.status, PlanStatus::TimeLimit) << late.reason;
+  EXPECT_EQ(solver->solves, 0);
+  const ExpertResult in_time = planner.plan(s);
+  EXPECT_EQ(in_time.status, PlanStatus::Converged) << in_time.reason;
+  EXPECT_GE(solver->solves, 2);
+}
+
+// Out of time, the search stops after the root relaxation: the incumbent
+// heuristics (hinted modes, moved switches) no longer run past the limit.
+TEST(FastSolver, OutOfTimeTheIncumbentSearchDoesNotStart) {
+  const Scenario s = open_road_scenario(Behavior::ConstantSpeed);
+  const LaneChangeQp qp = first_round_problem(s, Config{});
+  const LaneChangeSolution full = FastLaneChangeSolver{}.solve(qp, {});
+  ASSERT_EQ(full.status, MiqpStatus::Optimal);
+  ASSERT_GT(full.nodes, 1);
+  MiqpSettings no_time;
+  no_time.time_limit_s = 0.0;
+  const LaneChangeSolution cut = FastLaneChangeSolver{}.solve(qp, no_time, {nullptr, &full.modes});
+  EXPECT_EQ(cut.status, MiqpStatus::TimeLimit);
+  EXPECT_EQ(cut.nodes, 1);
+  EXPECT_FALSE(cut.has_solution());
+}
+
 TEST(Planner, NoGapIsAFailure) {
   const Scenario s = no_gap_scenario();
   const ExpertPlanner planner(Config{}, std::make_shared<FastLaneChangeSolver>());

@@ -119,9 +119,7 @@ TEST(MlpMiqp, ANetworkThatDrivesWellIsNotOverruled) {
 // A check that ran out of time decided nothing, so the next step checks
 // again; a check that found no plan waits for the period.
 // The fast solver, except that a solve given less than a second reports its
-// time limit without an answer. A step budget of a picosecond still leaves
-// each round's MIQP a millisecond (ExpertPlanner), and a fast machine
-// finishes an easy scene's in that: this keeps the test off the clock.
+// time limit without an answer: this keeps the test off the clock.
 class OutOfTimeUnderASecond final : public expert::LaneChangeSolver {
  public:
   [[nodiscard]] std::string_view name() const override { return "out-of-time-under-a-second"; }
