@@ -619,6 +619,9 @@ std::unique_ptr<LaneChangeWorkspace> FastLaneChangeSolver::make_workspace() cons
 LaneChangeSolution FastLaneChangeSolver::solve(const LaneChangeQp& qp, const MiqpSettings& settings,
                                                const SolveHints& hints) const {
   const auto start = Clock::now();
+  const auto seconds_so_far = [start] {
+    return std::chrono::duration<double>(Clock::now() - start).count();
+  };
   std::unique_ptr<LaneChangeWorkspace> owned;
   FastWorkspace* ws = &workspace_for(hints, owned);
   LaneChangeSolution out;
@@ -664,7 +667,7 @@ LaneChangeSolution FastLaneChangeSolver::solve(const LaneChangeQp& qp, const Miq
     // run on past the limit either (a real-time step budget).
     auto settled = [&] {
       return root_bound >= prune_above(incumbent, settings) ||
-             std::chrono::duration<double>(Clock::now() - start).count() > settings.time_limit_s;
+             seconds_so_far() > settings.time_limit_s;
     };
     std::vector<std::pair<double, std::vector<int>>> starts;
     std::vector<int> rounded = rounded_modes(qp, *ws, root.path);
@@ -694,7 +697,7 @@ LaneChangeSolution FastLaneChangeSolver::solve(const LaneChangeQp& qp, const Miq
   numerical_trouble = root.numerical_failure;
   bool root_pending = root.feasible;
   while (root_pending || !ws->stack.empty()) {
-    const double elapsed = std::chrono::duration<double>(Clock::now() - start).count();
+    const double elapsed = seconds_so_far();
     if (elapsed > settings.time_limit_s || out.nodes >= settings.node_limit) {
       out.status = elapsed > settings.time_limit_s ? MiqpStatus::TimeLimit : MiqpStatus::NodeLimit;
       out.solve_ms = elapsed * 1000.0;
@@ -744,7 +747,7 @@ LaneChangeSolution FastLaneChangeSolver::solve(const LaneChangeQp& qp, const Miq
       ws->stack.push_back(std::move(child));
     }
   }
-  out.solve_ms = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+  out.solve_ms = seconds_so_far() * 1000.0;
   out.qp_iterations = ws->iterations;
   if (out.has_solution()) {
     out.status = MiqpStatus::Optimal;
