@@ -106,29 +106,49 @@ namespace {
 constexpr double kGapLookahead = 10.0;
 constexpr double kGapTimeStep = 0.1;
 
-// The `k` smallest of `d2` as (value, index), nearest first, ties to the
-// earlier row: one pass with a bounded max-heap, where sorting an index of
-// every row took about as long again as the distances themselves.
-std::vector<std::pair<double, int>> nearest_rows(const Eigen::VectorXf& d2, int k) {
-  const auto wanted = static_cast<std::size_t>(std::min<Eigen::Index>(k, d2.size()));
-  std::vector<std::pair<double, int>> heap;  // the farthest kept on top
-  if (wanted == 0) return heap;
-  heap.reserve(wanted + 1);
-  Eigen::Index i = 0;
-  for (; i < d2.size() && heap.size() < wanted; ++i) {
-    heap.emplace_back(d2(i), static_cast<int>(i));
-    std::push_heap(heap.begin(), heap.end());
+// The k nearest rows offered so far as (squared distance, row), nearest
+// first, ties to the earlier row whatever order the rows come in: a bounded
+// max-heap, where sorting an index of every row took about as long again as
+// the distances themselves.
+class NearestRows {
+ public:
+  explicit NearestRows(int k) : wanted_(static_cast<std::size_t>(std::max(k, 0))) {
+    heap_.reserve(wanted_ + 1);
   }
-  for (; i < d2.size(); ++i) {
+  [[nodiscard]] bool full() const { return heap_.size() == wanted_; }
+  /// The k-th's squared distance; only when full().
+  [[nodiscard]] double farthest() const { return heap_.front().first; }
+  void offer(double squared_distance, int row) {
+    const std::pair<double, int> candidate{squared_distance, row};
+    if (heap_.size() < wanted_) {
+      heap_.push_back(candidate);
+      std::push_heap(heap_.begin(), heap_.end());
+      return;
+    }
     // Most rows are farther than the k-th so far: one comparison each.
-    if (d2(i) >= heap.front().first) continue;
-    std::pop_heap(heap.begin(), heap.end());
-    heap.back() = {d2(i), static_cast<int>(i)};
-    std::push_heap(heap.begin(), heap.end());
+    if (wanted_ == 0 || !(candidate < heap_.front())) return;
+    std::pop_heap(heap_.begin(), heap_.end());
+    heap_.back() = candidate;
+    std::push_heap(heap_.begin(), heap_.end());
   }
-  std::sort_heap(heap.begin(), heap.end());
-  return heap;
-}
+  [[nodiscard]] std::vector<std::pair<double, int>> sorted() && {
+    std::sort_heap(heap_.begin(), heap_.end());
+    return std::move(heap_);
+  }
+
+ private:
+  std::size_t wanted_;
+  std::vector<std::pair<double, int>> heap_;  // the farthest kept on top
+};
+
+// The behavior one-hot's columns among the features, where a model has them.
+constexpr Eigen::Index kFirstBehaviorFeature = 14;
+constexpr Eigen::Index kBehaviorFeatures = 3;
+
+// Relative slack on a behavior's bound: a bound is a partial sum of the
+// rows' own float terms, so it is never above a row's distance in the scan's
+// order of summation; the slack covers a compiler that fuses or reorders it.
+constexpr double kBoundSlack = 1e-5;
 
 }  // namespace
 
@@ -213,7 +233,7 @@ StrategyModel StrategyModel::fit(const StrategyRows& rows, const StrategySetting
   }
   m.standardizer_ = Standardizer::fit(x);
   m.points_ = m.standardizer_.apply(x).transpose();
-  m.table_ = m.points_.transpose().cast<float>();
+  m.arrange_table();
   std::map<Strategy, int> index;
   for (const Strategy& s : labels) {
     const auto [it, fresh] = index.emplace(s, static_cast<int>(m.strategies_.size()));
@@ -223,7 +243,33 @@ StrategyModel StrategyModel::fit(const StrategyRows& rows, const StrategySetting
   return m;
 }
 
-std::vector<Strategy> StrategyModel::predict(const Eigen::VectorXd& features, int count) const {
+void StrategyModel::arrange_table() {
+  const Eigen::Index n = points_.cols();
+  const bool grouped = points_.rows() >= kFirstBehaviorFeature + kBehaviorFeatures;
+  std::vector<int> group(static_cast<std::size_t>(n), 0);
+  if (grouped) {
+    for (Eigen::Index r = 0; r < n; ++r) {
+      Eigen::Index g = 0;
+      points_.col(r).segment(kFirstBehaviorFeature, kBehaviorFeatures).maxCoeff(&g);
+      group[static_cast<std::size_t>(r)] = static_cast<int>(g);
+    }
+  }
+  const int groups = grouped ? static_cast<int>(kBehaviorFeatures) : 1;
+  table_row_.clear();
+  group_begin_.assign(1, 0);
+  for (int g = 0; g < groups; ++g) {
+    for (Eigen::Index r = 0; r < n; ++r) {
+      if (group[static_cast<std::size_t>(r)] == g) table_row_.push_back(static_cast<int>(r));
+    }
+    group_begin_.push_back(static_cast<Eigen::Index>(table_row_.size()));
+  }
+  table_.resize(n, points_.rows());
+  for (Eigen::Index i = 0; i < n; ++i) {
+    table_.row(i) = points_.col(table_row_[static_cast<std::size_t>(i)]).transpose().cast<float>();
+  }
+}
+
+Eigen::VectorXf StrategyModel::standardized_query(const Eigen::VectorXd& features) const {
   if (features.size() != points_.rows()) {
     std::string what = "the strategy model takes ";
     what += std::to_string(points_.rows());
@@ -231,17 +277,61 @@ std::vector<Strategy> StrategyModel::predict(const Eigen::VectorXd& features, in
     what += std::to_string(features.size());
     throw InputError("", what);
   }
-  const Eigen::VectorXd q = (features - standardizer_.mean).cwiseQuotient(standardizer_.scale);
-  // Squared distances summed feature by feature, each a contiguous column:
-  // no cancellation, so a row the query repeats is at exactly 0 and decides
-  // alone (both are rounded to float alike). Float halves the bytes read,
-  // the bound on this loop.
-  const Eigen::VectorXf qf = q.cast<float>();
-  Eigen::VectorXf d2 = Eigen::VectorXf::Zero(table_.rows());
-  for (Eigen::Index j = 0; j < table_.cols(); ++j) {
-    d2.array() += (table_.col(j).array() - qf(j)).square();
+  // Both the rows and the query are rounded to float alike, so a row the
+  // query repeats is at exactly 0 and decides alone.
+  return ((features - standardizer_.mean).cwiseQuotient(standardizer_.scale)).cast<float>();
+}
+
+// The behavior one-hot's share of the squared distance from q to every row
+// of group g (they all share it), summed as the scan sums it.
+float StrategyModel::behavior_bound(const Eigen::VectorXf& q, std::size_t g) const {
+  const Eigen::Index begin = group_begin_[g];
+  if (group_begin_.size() == 2 || begin == group_begin_[g + 1]) return 0.0F;
+  float bound = 0.0F;
+  for (Eigen::Index j = kFirstBehaviorFeature; j < kFirstBehaviorFeature + kBehaviorFeatures; ++j) {
+    const float d = table_(begin, j) - q(j);
+    bound += d * d;
   }
-  const std::vector<std::pair<double, int>> nearest = nearest_rows(d2, neighbors_);
+  return bound;
+}
+
+std::vector<std::pair<double, int>> StrategyModel::nearest(const Eigen::VectorXf& q,
+                                                           bool skip_far_behaviors) const {
+  std::vector<std::pair<float, std::size_t>> order;  // (bound, group): the nearest behavior first
+  for (std::size_t g = 0; g + 1 < group_begin_.size(); ++g) {
+    order.emplace_back(skip_far_behaviors ? behavior_bound(q, g) : 0.0F, g);
+  }
+  std::sort(order.begin(), order.end());
+  NearestRows nearest(neighbors_);
+  Eigen::VectorXf d2;
+  for (const auto& [bound, g] : order) {
+    if (nearest.full() && bound > nearest.farthest() * (1.0 + kBoundSlack)) continue;
+    const Eigen::Index begin = group_begin_[g];
+    const Eigen::Index size = group_begin_[g + 1] - begin;
+    // Squared distances summed feature by feature, each a contiguous column;
+    // float halves the bytes read, the bound on this loop.
+    d2.setZero(size);
+    for (Eigen::Index j = 0; j < table_.cols(); ++j) {
+      d2.array() += (table_.col(j).segment(begin, size).array() - q(j)).square();
+    }
+    for (Eigen::Index i = 0; i < size; ++i) {
+      nearest.offer(d2(i), table_row_[static_cast<std::size_t>(begin + i)]);
+    }
+  }
+  return std::move(nearest).sorted();
+}
+
+std::vector<Strategy> StrategyModel::predict(const Eigen::VectorXd& features, int count) const {
+  return vote(nearest(standardized_query(features), true), count);
+}
+
+std::vector<Strategy> StrategyModel::predict_by_scan(const Eigen::VectorXd& features,
+                                                     int count) const {
+  return vote(nearest(standardized_query(features), false), count);
+}
+
+std::vector<Strategy> StrategyModel::vote(const std::vector<std::pair<double, int>>& nearest,
+                                          int count) const {
   // Inverse-distance votes: a scene seen before (distance 0) decides alone.
   std::vector<std::pair<double, int>> votes;  // (weight, strategy)
   for (const auto& [squared_distance, row] : nearest) {
@@ -319,7 +409,7 @@ StrategyModel StrategyModel::from_json(const json& j) {
     }
   }
   m.points_ = Eigen::Map<const Eigen::MatrixXd>(points.data(), width, n);
-  m.table_ = m.points_.transpose().cast<float>();
+  m.arrange_table();
   return m;
 }
 

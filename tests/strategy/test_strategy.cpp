@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 #include <memory>
+#include <random>
 #include <string>
 
 #include "lanechange/error.hpp"
@@ -287,6 +288,71 @@ TEST(Strategy, TheVoteTakesTheKNearestRowsInTheirOrder) {
   const std::vector<learn::Strategy> expected{rows.labels[10], rows.labels[11], rows.labels[9],
                                               rows.labels[12], rows.labels[8]};
   EXPECT_EQ(model.predict(q, 10), expected);
+}
+
+// Row i's strategy: i in base 3, so every row has its own.
+learn::Strategy strategy_number(int i) {
+  learn::Strategy s(1, '0');
+  for (s.clear(); i > 0 || s.empty(); i /= 3) s.insert(s.begin(), static_cast<char>('0' + i % 3));
+  return s;
+}
+
+int number_of(const learn::Strategy& s) {
+  int i = 0;
+  for (const char c : s) i = 3 * i + (c - '0');
+  return i;
+}
+
+// Rows of three behaviors with every row its own strategy, so the vote
+// lists the neighbours nearest first. The idm rows sit far off along one
+// feature, so an idm query finds its neighbours among the other behaviors'
+// rows, past the one-hot's distance; some rows repeat, so ties decide.
+learn::StrategyRows behavior_rows() {
+  learn::StrategyRows rows;
+  const auto width = static_cast<Eigen::Index>(learn::strategy_feature_names().size());
+  std::mt19937_64 rng(42);
+  std::normal_distribution<double> normal;
+  for (int i = 0; i < 600; ++i) {
+    const int behavior = i % 3;
+    Eigen::VectorXd f(width);
+    for (Eigen::Index j = 0; j < width; ++j) f(j) = normal(rng);
+    f.segment(14, 3).setZero();
+    f(14 + behavior) = 1.0;
+    if (behavior == 2) f(2) += 40.0;
+    if (i % 50 == 49) f = rows.features[static_cast<std::size_t>(i - 3)];
+    rows.features.push_back(f);
+    rows.labels.push_back(strategy_number(i));
+  }
+  return rows;
+}
+
+TEST(Strategy, SkippingFarBehaviorsKeepsTheScansNeighbours) {
+  const learn::StrategyRows rows = behavior_rows();
+  const auto model = learn::StrategyModel::fit(rows, {7, 0});
+  std::mt19937_64 rng(7);
+  std::normal_distribution<double> normal;
+  int idm_queries_answered_by_others = 0;
+  for (int i = 0; i < 300; ++i) {
+    // Every third query is a row itself (a repeated one among them).
+    Eigen::VectorXd q = rows.features[static_cast<std::size_t>((i * 7) % 600)];
+    if (i % 3 != 0) {
+      for (Eigen::Index j = 0; j < 14; ++j) q(j) += 0.5 * normal(rng);
+    }
+    if (i % 5 == 0) {
+      q.segment(14, 3).setZero();
+      q(14 + 2) = 1.0;  // an idm query near the other behaviors' rows
+    }
+    const auto fast = model.predict(q, 7);
+    const auto scan = model.predict_by_scan(q, 7);
+    ASSERT_EQ(fast.size(), 7U);
+    EXPECT_EQ(fast, scan) << "query " << i;
+    if (q(16) == 1.0 && q(2) < 20.0) {
+      const int first = number_of(fast.front());
+      idm_queries_answered_by_others += first % 3 != 2 ? 1 : 0;
+    }
+  }
+  // The far behaviors were scanned where they hold the nearest rows.
+  EXPECT_GT(idm_queries_answered_by_others, 10);
 }
 
 TEST(Strategy, AnInfeasiblePredictionFallsBackToTheExactAnswer) {

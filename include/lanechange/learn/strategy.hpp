@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "lanechange/learn/classifier.hpp"
@@ -75,10 +76,21 @@ class StrategyModel {
   [[nodiscard]] nlohmann::json to_json() const;
 
   /// Up to `count` distinct strategies, most likely first (the neighbours'
-  /// inverse-distance vote).
+  /// inverse-distance vote). A behavior whose rows the one-hot features alone
+  /// put farther than the k-th nearest found so far is not scanned: the same
+  /// neighbours as predict_by_scan's, at a third of the rows read where the
+  /// query's own behavior decides.
   [[nodiscard]] std::vector<Strategy> predict(const Eigen::VectorXd& features, int count) const;
+  /// The same vote with every row's distance computed: the reference the
+  /// vote is tested and benchmarked against.
+  [[nodiscard]] std::vector<Strategy> predict_by_scan(const Eigen::VectorXd& features,
+                                                      int count) const;
   [[nodiscard]] std::vector<Strategy> predict(const Scenario& scene, int count) const {
     return predict(strategy_features(scene, traffic_speed_cap_).head(points_.rows()), count);
+  }
+  [[nodiscard]] std::vector<Strategy> predict_by_scan(const Scenario& scene, int count) const {
+    return predict_by_scan(strategy_features(scene, traffic_speed_cap_).head(points_.rows()),
+                           count);
   }
   /// The leading strategy_feature_names() it was trained on.
   [[nodiscard]] int features() const { return static_cast<int>(points_.rows()); }
@@ -91,11 +103,22 @@ class StrategyModel {
   double traffic_speed_cap_ = std::numeric_limits<double>::infinity();
   Standardizer standardizer_;
   Eigen::MatrixXd points_;  ///< standardized features, one column per row
-  /// points_ transposed and in float, one row per model row: the vote's
-  /// search reads a column per feature, contiguous, at half the bytes.
+  /// points_ in float, one row per model row, the rows of each behavior
+  /// together (in their order): the vote's scan reads a column per feature,
+  /// contiguous, at half the bytes, one behavior at a time.
   Eigen::MatrixXf table_;
-  std::vector<int> label_;  ///< index into strategies_, per column
+  std::vector<int> table_row_;             ///< the model row (of label_) of each table_ row
+  std::vector<Eigen::Index> group_begin_;  ///< each behavior's first table_ row, then the end
+  std::vector<int> label_;                 ///< index into strategies_, per column
   std::vector<Strategy> strategies_;
+
+  void arrange_table();
+  [[nodiscard]] float behavior_bound(const Eigen::VectorXf& q, std::size_t group) const;
+  [[nodiscard]] std::vector<std::pair<double, int>> nearest(const Eigen::VectorXf& q,
+                                                            bool skip_far_behaviors) const;
+  [[nodiscard]] Eigen::VectorXf standardized_query(const Eigen::VectorXd& features) const;
+  [[nodiscard]] std::vector<Strategy> vote(const std::vector<std::pair<double, int>>& nearest,
+                                           int count) const;
 };
 
 /// The strategy of a plan's lane modes (LaneOccupancy values per node, -1
