@@ -125,7 +125,6 @@ class NearestRows {
       std::push_heap(heap_.begin(), heap_.end());
       return;
     }
-    // Most rows are farther than the k-th so far: one comparison each.
     if (wanted_ == 0 || !(candidate < heap_.front())) return;
     std::pop_heap(heap_.begin(), heap_.end());
     heap_.back() = candidate;
@@ -303,6 +302,8 @@ std::vector<std::pair<double, int>> StrategyModel::nearest(const Eigen::VectorXf
   }
   std::sort(order.begin(), order.end());
   NearestRows nearest(neighbors_);
+  // The k-th's distance, exact in float: the rows' distances are floats.
+  float worst = std::numeric_limits<float>::infinity();
   Eigen::VectorXf d2;
   for (const auto& [bound, g] : order) {
     if (nearest.full() && bound > nearest.farthest() * (1.0 + kBoundSlack)) continue;
@@ -315,7 +316,10 @@ std::vector<std::pair<double, int>> StrategyModel::nearest(const Eigen::VectorXf
       d2.array() += (table_.col(j).segment(begin, size).array() - q(j)).square();
     }
     for (Eigen::Index i = 0; i < size; ++i) {
+      // Most rows are farther than the k-th so far: one comparison each.
+      if (d2(i) > worst) continue;
       nearest.offer(d2(i), table_row_[static_cast<std::size_t>(begin + i)]);
+      if (nearest.full()) worst = static_cast<float>(nearest.farthest());
     }
   }
   return std::move(nearest).sorted();
