@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <optional>
 
 #include "lanechange/error.hpp"
 
@@ -97,22 +98,33 @@ CandidateOutcome StrategyQpPlanner::solve_candidate(const Scenario& scene,
   return out;
 }
 
-void StrategyQpPlanner::time_warm_starts(const Scenario& scene, const expert::PlanHints& hints,
-                                         std::vector<Candidate>& list) const {
-  const auto nodes = static_cast<std::size_t>(scene.steps) + 1;
-  const bool path_fits = hints.path != nullptr && hints.path->states.size() == nodes;
-  if (!config_.strategy_qp.timed_warm_start || path_fits || list.empty()) return;
-  // The expert's warm start changes lanes in the middle of the horizon; with
-  // the modes fixed, rounds that start from a change at the candidate's own
-  // switch nodes linearize near where they end.
-  const Config config = effective_config(config_, scene);
-  const double dt = scene.horizon / scene.steps;
-  const TrafficPrediction prediction =
-      predict_traffic(scene, config, scene.steps + config.expert.prediction_lead_steps, dt);
-  for (Candidate& c : list) {
-    c.start = expert::warm_start_for_modes(scene, config, prediction, c.modes);
+// The expert's warm start changes lanes in the middle of the horizon; with
+// the modes fixed, rounds that start from a change at the candidate's own
+// switch nodes linearize near where they end.
+class StrategyQpPlanner::StartTimer {
+ public:
+  StartTimer(const Config& config, const Scenario& scene, const expert::PlanHints& hints)
+      : scene_(scene) {
+    const auto nodes = static_cast<std::size_t>(scene.steps) + 1;
+    const bool path_fits = hints.path != nullptr && hints.path->states.size() == nodes;
+    if (config.strategy_qp.timed_warm_start && !path_fits)
+      config_ = effective_config(config, scene);
   }
-}
+  void time(Candidate& c) {
+    if (!config_) return;
+    if (!prediction_) {
+      const double dt = scene_.horizon / scene_.steps;
+      prediction_ = predict_traffic(scene_, *config_,
+                                    scene_.steps + config_->expert.prediction_lead_steps, dt);
+    }
+    c.start = expert::warm_start_for_modes(scene_, *config_, *prediction_, c.modes);
+  }
+
+ private:
+  const Scenario& scene_;
+  std::optional<Config> config_;  // none: the candidates start from the plan's path
+  std::optional<TrafficPrediction> prediction_;
+};
 
 bool StrategyQpPlanner::can_hold(const Scenario& scene, const expert::PlanHints& hints,
                                  Candidate& c, Linearization& shared) const {
@@ -133,12 +145,13 @@ std::vector<StrategyQpPlanner::Candidate> StrategyQpPlanner::candidates_of(
     const Scenario& scene, const expert::PlanHints& hints) const {
   const LaneRule rule = effective_config(config_, scene).expert.lane_rule;
   std::vector<Candidate> list;
+  StartTimer starts(config_, scene, hints);
   // The last plan's modes (closed loop) come first: they were the optimum a
   // step ago, and keep the manoeuvre steady.
   const auto nodes = static_cast<std::size_t>(scene.steps) + 1;
   if (hints.modes != nullptr && hints.modes->size() == nodes) {
     list.push_back({{}, *hints.modes, {}, {}});
-    time_warm_starts(scene, hints, list);
+    starts.time(list.back());
   }
   // With the last plan's modes to go on, the votes are alternatives to them
   // and the plain top k serve; without (open loop, a rollout's first step),
@@ -151,7 +164,6 @@ std::vector<StrategyQpPlanner::Candidate> StrategyQpPlanner::candidates_of(
     std::vector<int> modes = modes_of_strategy(s, scene.steps, rule);
     votes.push_back({std::move(s), std::move(modes), {}, {}});
   }
-  time_warm_starts(scene, hints, votes);
   Linearization shared;
   int taken = 0;
   for (Candidate& c : votes) {
@@ -159,6 +171,7 @@ std::vector<StrategyQpPlanner::Candidate> StrategyQpPlanner::candidates_of(
     // Two strategies may agree on this horizon: one solve is enough.
     const bool seen = std::any_of(list.begin(), list.end(),
                                   [&c](const Candidate& other) { return other.modes == c.modes; });
+    if (!seen) starts.time(c);
     if (!seen && pool > wanted && !can_hold(scene, hints, c, shared)) continue;
     ++taken;
     if (!seen) list.push_back(std::move(c));
@@ -383,7 +396,7 @@ CandidateOutcome StrategyQpPlanner::assess_strategy(const Scenario& scene,
                                                     const learn::Strategy& strategy) const {
   const LaneRule rule = effective_config(config_, scene).expert.lane_rule;
   std::vector<Candidate> one{{strategy, modes_of_strategy(strategy, scene.steps, rule), {}, {}}};
-  time_warm_starts(scene, {}, one);
+  StartTimer(config_, scene, {}).time(one.front());
   expert::ExpertResult plan;
   CandidateOutcome o =
       solve_candidate(scene, one.front().modes, {}, {one.front().first_point({}), nullptr}, plan);

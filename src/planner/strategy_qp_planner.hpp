@@ -104,9 +104,10 @@ class StrategyQpPlanner final : public ClosedLoopPlanner {
   /// of its own, made once) and says whether its modes can hold there.
   [[nodiscard]] bool can_hold(const Scenario& scene, const expert::PlanHints& hints, Candidate& c,
                               Linearization& shared) const;
-  /// Gives each candidate its timed warm start where the plan has no path.
-  void time_warm_starts(const Scenario& scene, const expert::PlanHints& hints,
-                        std::vector<Candidate>& list) const;
+  /// Gives candidates their timed warm starts where the plan has no path,
+  /// one at a time on one traffic prediction: a vote pool ranks more
+  /// strategies than the plan looks at (strategy_qp_planner.cpp).
+  class StartTimer;
   /// The predicted strategies (after the last plan's modes, in closed loop),
   /// each once on this horizon, the first `candidates` of the vote pool that
   /// can hold.
