@@ -1,9 +1,11 @@
 #include "lanechange/learn/strategy.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <map>
+#include <optional>
 
 #include "lanechange/error.hpp"
 #include "lanechange/learn/learn_data.hpp"
@@ -242,23 +244,45 @@ StrategyModel StrategyModel::fit(const StrategyRows& rows, const StrategySetting
   return m;
 }
 
+namespace {
+
+// Each row's behavior, from its one-hot features. None where the model has no
+// such features, or where the rows of a behavior do not all share one value
+// (rows fitted from other features than strategy_features'): a behavior's
+// bound is read off its first row.
+std::optional<std::vector<int>> behavior_groups(const Eigen::MatrixXd& points) {
+  if (points.rows() < kFirstBehaviorFeature + kBehaviorFeatures) return std::nullopt;
+  constexpr auto kCount = static_cast<std::size_t>(kBehaviorFeatures);
+  using OneHot = std::array<float, kCount>;
+  std::vector<int> group(static_cast<std::size_t>(points.cols()));
+  std::array<std::optional<OneHot>, kCount> first;  // each behavior's first row's
+  for (Eigen::Index r = 0; r < points.cols(); ++r) {
+    OneHot mine{};
+    std::size_t g = 0;
+    for (std::size_t k = 0; k < kCount; ++k) {
+      mine[k] = static_cast<float>(points(kFirstBehaviorFeature + static_cast<Eigen::Index>(k), r));
+      if (mine[k] > mine[g]) g = k;
+    }
+    if (!first[g]) first[g] = mine;
+    if (*first[g] != mine) return std::nullopt;
+    group[static_cast<std::size_t>(r)] = static_cast<int>(g);
+  }
+  return group;
+}
+
+}  // namespace
+
 void StrategyModel::arrange_table() {
   const Eigen::Index n = points_.cols();
-  const bool grouped = points_.rows() >= kFirstBehaviorFeature + kBehaviorFeatures;
-  std::vector<int> group(static_cast<std::size_t>(n), 0);
-  if (grouped) {
-    for (Eigen::Index r = 0; r < n; ++r) {
-      Eigen::Index g = 0;
-      points_.col(r).segment(kFirstBehaviorFeature, kBehaviorFeatures).maxCoeff(&g);
-      group[static_cast<std::size_t>(r)] = static_cast<int>(g);
-    }
-  }
-  const int groups = grouped ? static_cast<int>(kBehaviorFeatures) : 1;
+  const std::optional<std::vector<int>> behavior = behavior_groups(points_);
+  const int groups = behavior ? static_cast<int>(kBehaviorFeatures) : 1;
   table_row_.clear();
   group_begin_.assign(1, 0);
   for (int g = 0; g < groups; ++g) {
     for (Eigen::Index r = 0; r < n; ++r) {
-      if (group[static_cast<std::size_t>(r)] == g) table_row_.push_back(static_cast<int>(r));
+      if (!behavior || (*behavior)[static_cast<std::size_t>(r)] == g) {
+        table_row_.push_back(static_cast<int>(r));
+      }
     }
     group_begin_.push_back(static_cast<Eigen::Index>(table_row_.size()));
   }

@@ -355,6 +355,22 @@ TEST(Strategy, SkippingFarBehaviorsKeepsTheScansNeighbours) {
   EXPECT_GT(idm_queries_answered_by_others, 10);
 }
 
+// Rows whose behavior features are not one value per behavior (a model
+// fitted on other features) give no bound: every row is scanned. Here the
+// first constant-speed row's would put all constant-speed rows out of reach.
+TEST(Strategy, RowsWithoutOneHotBehaviorsAreAllScanned) {
+  learn::StrategyRows rows = behavior_rows();
+  rows.features[0](14) = 30.0;
+  const auto model = learn::StrategyModel::fit(rows, {7, 0});
+  std::mt19937_64 rng(3);
+  std::normal_distribution<double> normal;
+  for (int i = 0; i < 100; ++i) {
+    Eigen::VectorXd q = rows.features[static_cast<std::size_t>(3 * (1 + i))];
+    for (Eigen::Index j = 0; j < 14; ++j) q(j) += 0.5 * normal(rng);
+    EXPECT_EQ(model.predict(q, 7), model.predict_by_scan(q, 7)) << "query " << i;
+  }
+}
+
 TEST(Strategy, AnInfeasiblePredictionFallsBackToTheExactAnswer) {
   Config config = testing::untimed_config();
   const Scenario s = testing::open_road_scenario();
