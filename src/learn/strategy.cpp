@@ -326,11 +326,12 @@ std::vector<std::pair<double, int>> StrategyModel::nearest(const Eigen::VectorXf
   }
   std::sort(order.begin(), order.end());
   NearestRows nearest(neighbors_);
-  // The k-th's distance, exact in float: the rows' distances are floats.
+  // The k-th's distance once there are k (exact in float: the rows'
+  // distances are floats), until then none.
   float worst = std::numeric_limits<float>::infinity();
   Eigen::VectorXf d2;
   for (const auto& [bound, g] : order) {
-    if (nearest.full() && bound > nearest.farthest() * (1.0 + kBoundSlack)) continue;
+    if (bound > worst * (1.0 + kBoundSlack)) continue;
     const Eigen::Index begin = group_begin_[g];
     const Eigen::Index size = group_begin_[g + 1] - begin;
     // Squared distances summed feature by feature, each a contiguous column;
