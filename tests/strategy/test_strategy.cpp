@@ -292,8 +292,11 @@ TEST(Strategy, TheVoteTakesTheKNearestRowsInTheirOrder) {
 
 // Row i's strategy: i in base 3, so every row has its own.
 learn::Strategy strategy_number(int i) {
-  learn::Strategy s(1, '0');
-  for (s.clear(); i > 0 || s.empty(); i /= 3) s.insert(s.begin(), static_cast<char>('0' + i % 3));
+  learn::Strategy s;
+  do {
+    s.insert(s.begin(), static_cast<char>('0' + i % 3));
+    i /= 3;
+  } while (i > 0);
   return s;
 }
 
