@@ -20,6 +20,7 @@ struct TrainArgs {
   int jobs = 0;
   int max_epochs = learn::NetworkSettings{}.max_epochs;
   int network_width = learn::kHiddenWidth;
+  int networks = 1;
   bool plain_naive_bayes = false;
   bool quick = false;
   bool no_plots = false;
@@ -51,6 +52,7 @@ learn::TrainOptions train_options(const TrainArgs& a) {
   o.jobs = a.jobs;
   o.network.max_epochs = a.max_epochs;
   o.network.hidden_width = a.network_width;
+  o.network.networks = a.networks;
   o.search.naive_bayes_kernel = !a.plain_naive_bayes;
   o.search.quick = a.quick;
   o.plots = !a.no_plots;
@@ -144,6 +146,10 @@ void add_train(CLI::App& app, const ConfigSource& config) {
   cmd->add_option("--network-width", args.network_width,
                   "Neurons in each of the network's 10 hidden layers (the paper's: 10)")
       ->check(CLI::Range(1, learn::kMaxHiddenWidth));
+  cmd->add_option("--networks", args.networks,
+                  "Action networks trained from their own seeds; the policy acts as their mean "
+                  "(an ensemble; DAgger's rounds keep the number)")
+      ->check(CLI::Range(1, learn::kMaxNetworks));
   cmd->add_flag("--plain-naive-bayes", args.plain_naive_bayes,
                 "One normal per feature and class instead of kernel densities");
   cmd->add_flag("--quick", args.quick, "Smaller hyperparameter grids (tests, smoke runs)");

@@ -6,6 +6,7 @@
 
 #include <chrono>
 #include <cstdlib>
+#include <mutex>
 #include <random>
 
 #include "lanechange/error.hpp"
@@ -136,6 +137,13 @@ void TrainedNetwork::export_layers(std::vector<Eigen::MatrixXf>& weights,
 
 void TrainedNetwork::save(const std::string& path) const { dlib::serialize(path) << impl->net; }
 
+std::uint64_t member_seed(std::uint64_t seed, int member) {
+  // Far apart, so that the seed offsets of DAgger's candidates (0, 1, ...) never
+  // give two networks of different members the same seed.
+  constexpr std::uint64_t kMemberStride = 1'000'003;
+  return seed + kMemberStride * static_cast<std::uint64_t>(member);
+}
+
 TrainedNetwork train_network(const Eigen::MatrixXd& x, const Eigen::MatrixXd& y,
                              const std::vector<int>& train, const std::vector<int>& validation,
                              const NetworkSettings& s, std::ostream* progress,
@@ -147,6 +155,10 @@ TrainedNetwork train_network(const Eigen::MatrixXd& x, const Eigen::MatrixXd& y,
     set_hidden_width(net, s.hidden_width);
     // dlib draws its initial weights from std::rand when a layer is set up;
     // seeding it and setting up here (one forward pass) makes runs repeatable.
+    // std::rand's state is global: an ensemble's networks train on several
+    // threads, and each must draw its own seed's sequence whole.
+    static std::mutex rand_mutex;
+    const std::lock_guard lock(rand_mutex);
     std::srand(static_cast<unsigned>(s.seed));
     (void)net(row_of(x, 0));
   } else {

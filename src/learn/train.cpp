@@ -245,6 +245,46 @@ std::pair<Standardizer, Standardizer> network_standardizers(const Context& c,
   return {Standardizer{w.input_mean, w.input_scale}, Standardizer{w.output_mean, w.output_scale}};
 }
 
+// An ensemble's networks, on the same rows, on up to `jobs` threads; one
+// network is the paper's.
+std::vector<TrainedNetwork> train_members(const Context& c, const Eigen::MatrixXd& x,
+                                          const Eigen::MatrixXd& y, const std::vector<int>& fit,
+                                          const std::vector<int>& validation,
+                                          const std::string& warm_file) {
+  const int n = c.options.network.networks;
+  std::vector<TrainedNetwork> nets(static_cast<std::size_t>(n));
+  parallel_for(n, c.options.jobs, [&](int k) {
+    NetworkSettings settings = c.options.network;
+    settings.seed = member_seed(c.seeds.network, k);
+    // Several threads' epoch lines would interleave: the first network's alone.
+    nets[static_cast<std::size_t>(k)] = train_network(
+        x, y, fit, validation, settings, k == 0 ? c.options.progress : nullptr, warm_file);
+  });
+  return nets;
+}
+
+// network.dlib is the first new network, network-K.dlib the others; a
+// retrain's copy of its base may hold more of them than it makes.
+void save_networks(const Context& c, const std::vector<TrainedNetwork>& nets) {
+  for (const auto& entry : fs::directory_iterator(c.dir)) {
+    const std::string name = entry.path().filename().string();
+    if (name.starts_with("network-") && name.ends_with(".dlib")) fs::remove(entry.path());
+  }
+  for (std::size_t k = 0; k < nets.size(); ++k) {
+    const std::string name = k == 0 ? "network.dlib" : "network-" + std::to_string(k) + ".dlib";
+    nets[k].save((c.dir / name).string());
+  }
+}
+
+json member_metrics(const TrainedNetwork& net) {
+  return {{"epochs", net.curve.size()},
+          {"best_epoch", net.best_epoch},
+          {"best_validation_mse",
+           net.curve[static_cast<std::size_t>(net.best_epoch - 1)].validation_mse},
+          {"train_s", net.train_s},
+          {"s_per_epoch", net.seconds_per_epoch()}};
+}
+
 void train_action_network(Context& c) {
   const SampleTable& s = c.data.samples;
   const int n = c.data.scenarios.rows();
@@ -264,46 +304,56 @@ void train_action_network(Context& c) {
     fit_out.row(static_cast<Eigen::Index>(i)) = s.targets.row(fit[i]);
   }
   const auto [in_norm, out_norm] = network_standardizers(c, fit_in, fit_out);
-  NetworkSettings settings = c.options.network;
-  settings.seed = c.seeds.network;
-  c.say("action network: " + std::to_string(fit.size()) + " training rows, " +
-        std::to_string(validation.size()) + " validation rows" +
+  const int networks = c.options.network.networks;
+  c.say("action network" + (networks > 1 ? "s: " + std::to_string(networks) + " x " : ": ") +
+        std::to_string(fit.size()) + " training rows, " + std::to_string(validation.size()) +
+        " validation rows" +
         (c.warm_start.empty() ? std::string() : ", from the network of " + c.warm_start));
   const std::string warm_file =
       c.warm_start.empty() ? "" : (fs::path(c.warm_start) / "network.dlib").string();
-  const TrainedNetwork net = train_network(in_norm.apply(s.inputs), out_norm.apply(s.targets), fit,
-                                           validation, settings, c.options.progress, warm_file);
-  PolicyWeights w{c.data.action_inputs, c.data.action_targets, in_norm.mean, in_norm.scale,
-                  out_norm.mean,        out_norm.scale,        {},           {}};
-  net.export_layers(w.weights, w.biases);
+  const auto start = Clock::now();
+  const std::vector<TrainedNetwork> nets = train_members(
+      c, in_norm.apply(s.inputs), out_norm.apply(s.targets), fit, validation, warm_file);
+  const double train_s = seconds_since(start);
   std::vector<PolicyWeights> members;
   if (!c.average_with.empty()) {
     members = policy_members_from_json(
         lanechange::detail::read_json_file((fs::path(c.average_with) / "policy.json").string()));
   }
-  members.push_back(w);
+  for (const TrainedNetwork& net : nets) {
+    PolicyWeights w{c.data.action_inputs, c.data.action_targets, in_norm.mean, in_norm.scale,
+                    out_norm.mean,        out_norm.scale,        {},           {}};
+    net.export_layers(w.weights, w.biases);
+    members.push_back(std::move(w));
+  }
   const Policy policy(members);  // InputError for networks of other inputs
   lanechange::detail::write_file_atomically((c.dir / "policy.json").string(),
                                             policy_members_to_json(members).dump());
-  net.save((c.dir / "network.dlib").string());
-  detail::write_loss_csv(net.curve, (c.dir / "loss.csv").string());
-  if (c.options.plots) detail::plot_loss(net.curve, net.best_epoch, (c.dir / "loss.png").string());
+  save_networks(c, nets);
+  const TrainedNetwork& first = nets.front();
+  detail::write_loss_csv(first.curve, (c.dir / "loss.csv").string());
+  if (c.options.plots)
+    detail::plot_loss(first.curve, first.best_epoch, (c.dir / "loss.png").string());
 
-  // The errors are the policy's: the members' mean where it averages.
+  // The errors are the policy's: the members' mean where it averages. The
+  // curve's figures are the first network's.
   json m = policy_errors(policy, s, test, c.data.action_targets);
+  m.update(member_metrics(first));
   m["members"] = members.size();
-  m["epochs"] = net.curve.size();
-  m["best_epoch"] = net.best_epoch;
-  m["best_validation_mse"] = net.curve[static_cast<std::size_t>(net.best_epoch - 1)].validation_mse;
-  m["train_s"] = net.train_s;
-  m["s_per_epoch"] = net.seconds_per_epoch();
+  m["train_s"] = train_s;
+  if (networks > 1) {
+    m["ensemble"] = json::array();
+    for (const TrainedNetwork& net : nets) m["ensemble"].push_back(member_metrics(net));
+  }
   m["train_rows"] = fit.size();
   m["validation_rows"] = validation.size();
   m["test_rows"] = test.size();
   c.metrics["network"] = m;
   c.model["network"] = {{"policy", "policy.json"}, {"dlib", "network.dlib"}};
-  c.say("action network: " + std::to_string(net.curve.size()) + " epochs, test RMSE a " +
-        m["test_rmse"].begin()->dump() + ", omega " + (++m["test_rmse"].begin())->dump());
+  c.say("action network" + std::string(networks > 1 ? "s" : "") + ": " +
+        std::to_string(first.curve.size()) + " epochs" + (networks > 1 ? " (the first)" : "") +
+        ", test RMSE a " + m["test_rmse"].begin()->dump() + ", omega " +
+        (++m["test_rmse"].begin())->dump());
 }
 
 // The strategy model, and the share of test plans whose strategy (from
@@ -411,28 +461,36 @@ TrainReport build_and_publish(Context& c, const fs::path& out, Clock::time_point
 }  // namespace
 
 json TrainOptions::config() const {
-  return {{"seed", seed},
-          {"test_share", test_share},
-          {"cv_folds", search.folds},
-          {"knn_k", search.knn_k},
-          {"ensemble_trees", search.ensemble_trees},
-          {"naive_bayes_kernel", search.naive_bayes_kernel},
-          {"quick_search", search.quick},
-          {"network",
-           {{"hidden_layers", kHiddenLayers},
-            {"hidden_width", network.hidden_width},
-            {"activation", "tanh"},
-            {"optimizer", "adam"},
-            {"max_epochs", network.max_epochs},
-            {"patience", network.patience},
-            {"batch_size", network.batch_size},
-            {"learning_rate", network.learning_rate},
-            {"validation_share", network.validation_share}}},
-          {"strategy", {{"neighbors", strategy.neighbors}, {"node_stride", strategy.node_stride}}}};
+  json out = {
+      {"seed", seed},
+      {"test_share", test_share},
+      {"cv_folds", search.folds},
+      {"knn_k", search.knn_k},
+      {"ensemble_trees", search.ensemble_trees},
+      {"naive_bayes_kernel", search.naive_bayes_kernel},
+      {"quick_search", search.quick},
+      {"network",
+       {{"hidden_layers", kHiddenLayers},
+        {"hidden_width", network.hidden_width},
+        {"activation", "tanh"},
+        {"optimizer", "adam"},
+        {"max_epochs", network.max_epochs},
+        {"patience", network.patience},
+        {"batch_size", network.batch_size},
+        {"learning_rate", network.learning_rate},
+        {"validation_share", network.validation_share}}},
+      {"strategy", {{"neighbors", strategy.neighbors}, {"node_stride", strategy.node_stride}}}};
+  // Only an ensemble says so: models and DAgger runs from before ensembles
+  // describe (and resume) as before.
+  if (network.networks != 1) out["network"]["networks"] = network.networks;
+  return out;
 }
 
 TrainReport train_models(const TrainOptions& options) {
   const auto start = Clock::now();
+  if (options.network.networks < 1 || options.network.networks > kMaxNetworks) {
+    throw InputError("--networks", "must be 1.." + std::to_string(kMaxNetworks));
+  }
   check_out_dir(options.out_dir);
   const LearningData data = load_learning_data(options.data_dirs);
   const Split split = split_scenarios(data.scenarios.rows(), options.test_share, options.seed);
@@ -506,7 +564,16 @@ TrainReport retrain_network(const RetrainOptions& options) {
   train.seed = base.at("config").at("seed").get<std::uint64_t>();
   train.network = options.network;
   // A retrain keeps the base's shape (and a fine-tune needs it).
-  train.network.hidden_width = base.at("config").at("network").value("hidden_width", kHiddenWidth);
+  const json& base_network = base.at("config").at("network");
+  train.network.hidden_width = base_network.value("hidden_width", kHiddenWidth);
+  // An ensemble's rounds are ensembles of its size.
+  train.network.networks = base_network.value("networks", 1);
+  if (train.network.networks > 1 && !options.warm_start.empty()) {
+    throw InputError(options.warm_start,
+                     "a fine-tune starts from one network, and the base model "
+                     "averages " +
+                         std::to_string(train.network.networks));
+  }
   train.plots = options.plots;
   train.progress = options.progress;
   // Named, not a structured binding: the lambda below captures it.

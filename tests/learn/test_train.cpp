@@ -57,6 +57,16 @@ class Trained : public ::testing::Test {
     o.plots = false;
     return o;
   }
+  // A short retrain of `base`'s network on the suite's data set.
+  static RetrainOptions quick_retrain(const std::string& base, const std::string& out) {
+    RetrainOptions o;
+    o.base_model = base;
+    o.data_dirs = {data_dir()};
+    o.out_dir = out;
+    o.network.max_epochs = 2;
+    o.plots = false;
+    return o;
+  }
   static std::string data_dir() { return (root_ / "data").string(); }
   static std::string model_dir() { return (root_ / "model").string(); }
   // The metrics train_models returned, beside the metrics.json it wrote.
@@ -255,12 +265,7 @@ TEST_F(Trained, AWiderNetworkIsTrainedLoadedAndKeptByARetrain) {
   const json config = json::parse(testing::read_text(out + "/model.json"))["config"];
   EXPECT_EQ(config["network"]["hidden_width"], 16);
 
-  RetrainOptions o;
-  o.base_model = out;
-  o.data_dirs = {data_dir()};
-  o.out_dir = (root_ / "wide_retrained").string();
-  o.network.max_epochs = 2;
-  o.plots = false;
+  RetrainOptions o = quick_retrain(out, (root_ / "wide_retrained").string());
   (void)retrain_network(o);
   EXPECT_EQ(Model::load(o.out_dir).policy().width(), 16);
 
@@ -268,6 +273,49 @@ TEST_F(Trained, AWiderNetworkIsTrainedLoadedAndKeptByARetrain) {
   const auto bad = testing::run_cli(train_args(out) + " --network-width 65");
   EXPECT_EQ(bad.exit_code, 2) << bad.output;
   EXPECT_NE(bad.output.find("--network-width"), std::string::npos) << bad.output;
+  EXPECT_EQ(snapshot(out), before);
+}
+
+// An ensemble: its first network is the one-network model's (the same seed,
+// though trained beside another on two threads), the others differ, the
+// policy acts as their mean, and DAgger's retrain keeps the ensemble's size.
+TEST_F(Trained, AnEnsembleAveragesItsNetworksAndARetrainKeepsItsSize) {
+  const std::string out = (root_ / "ensemble_model").string();
+  const auto run = testing::run_cli(train_args(out) + " --networks 3");
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  const Model model = Model::load(out);
+  ASSERT_EQ(model.policy().members(), 3);
+  const json members = json::parse(testing::read_text(out + "/policy.json"))["average_of"];
+  ASSERT_EQ(members.size(), 3U);
+  EXPECT_EQ(members[0], json::parse(testing::read_text(model_dir() + "/policy.json")));
+  EXPECT_NE(members[1]["layers"], members[0]["layers"]);
+  EXPECT_NE(members[2]["layers"], members[1]["layers"]);
+  for (const char* file : {"network.dlib", "network-1.dlib", "network-2.dlib"}) {
+    EXPECT_TRUE(fs::exists(fs::path(out) / file)) << file;
+  }
+  EXPECT_EQ(json::parse(testing::read_text(out + "/metrics.json"))["network"]["ensemble"].size(),
+            3U);
+
+  const LearningData data = load_learning_data({data_dir()});
+  for (int r = 0; r < 5; ++r) {
+    const Observation obs = data.samples.inputs.row(r).transpose();
+    Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+    for (const json& m : members) mean += Policy(PolicyWeights::from_json(m)).act(obs) / 3.0;
+    EXPECT_LT((model.policy().act(obs) - mean).norm(), 1e-9) << r;
+  }
+
+  RetrainOptions o = quick_retrain(out, (root_ / "ensemble_retrained").string());
+  (void)retrain_network(o);
+  EXPECT_EQ(Model::load(o.out_dir).policy().members(), 3);
+  o.out_dir = (root_ / "ensemble_fine_tuned").string();
+  o.warm_start = out;
+  EXPECT_THROW((void)retrain_network(o), InputError);
+  EXPECT_FALSE(fs::exists(o.out_dir));
+
+  const auto before = snapshot(out);
+  const auto bad = testing::run_cli(train_args(out) + " --networks 0");
+  EXPECT_EQ(bad.exit_code, 2) << bad.output;
+  EXPECT_NE(bad.output.find("--networks"), std::string::npos) << bad.output;
   EXPECT_EQ(snapshot(out), before);
 }
 

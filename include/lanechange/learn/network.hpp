@@ -15,6 +15,9 @@
 
 namespace lanechange::learn {
 
+/// An ensemble's size bound: a policy's act() runs every member.
+inline constexpr int kMaxNetworks = 16;
+
 struct NetworkSettings {
   int hidden_width = kHiddenWidth;  ///< neurons per hidden layer, 1..kMaxHiddenWidth
   int max_epochs = 300;
@@ -23,7 +26,15 @@ struct NetworkSettings {
   double learning_rate = 1e-3;
   double validation_share = 0.1;  ///< of the training scenarios
   std::uint64_t seed = 1;
+  /// An ensemble (Lakshminarayanan et al. 2017): this many networks, each from its own
+  /// initial weights and batch order (member_seed), trained on the same rows; the policy
+  /// acts as their mean. 1: the paper's single network.
+  int networks = 1;
 };
+
+/// The seed of an ensemble's k-th network; member 0 keeps `seed`, so that a one-network
+/// model is what it was before ensembles.
+[[nodiscard]] std::uint64_t member_seed(std::uint64_t seed, int member);
 
 struct LossPoint {
   int epoch = 0;
