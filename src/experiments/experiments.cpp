@@ -41,6 +41,9 @@ constexpr double kTestShare = 0.2;  // the paper's 1000 of 5000
 // DAgger's training scenes (docs/strategy.md's seed), and every 2nd step labelled.
 constexpr std::uint64_t kDaggerSeed = 7001;
 constexpr int kDaggerStride = 2;
+// DAgger's policy is an ensemble (docs/strategy.md, "An ensemble per round"):
+// one network's seed moved the take-overs as much as a round's labels.
+constexpr int kDaggerNetworks = 3;
 
 std::uint64_t seed_of(std::uint64_t base, std::size_t behavior) { return base + behavior; }
 
@@ -224,15 +227,17 @@ learn::TrainOptions train_options(const Context& c) {
 
 void train(const Context& c) { (void)learn::train_models(train_options(c)); }
 
-// DAgger from the experiments' model: its rounds' models, labels and
-// evaluations stay under dagger/.
+// DAgger from the experiments' data, settings and seed, its round 0 the
+// experiments' model with an ensemble in place of the paper's one network
+// (the same classifiers: the same data and seed); its rounds' models,
+// labels and evaluations stay under dagger/.
 dagger::DaggerOptions dagger_options(const Context& c) {
   dagger::DaggerOptions d;
   d.train = train_options(c);
   d.train.out_dir = path_in(c, "dagger/model");
   d.train.plots = false;
+  d.train.network.networks = kDaggerNetworks;
   d.work_dir = path_in(c, "dagger/rounds");
-  d.base_model = path_in(c, "model");
   d.rounds = c.sizes.dagger_rounds;
   d.scenes = c.sizes.dagger_scenes;
   d.scene_seed = kDaggerSeed;
@@ -352,6 +357,7 @@ ExperimentReport run_experiments(const ExperimentOptions& o) {
                                           {"rounds", c.sizes.dagger_rounds},
                                           {"scenes", c.sizes.dagger_scenes},
                                           {"eval_count", 3 * c.sizes.eval_per_behavior},
+                                          {"networks", kDaggerNetworks},
                                           // Since stop 35: scored with the budget lifted.
                                           {"scoring", "untimed"}},
                                          {"dagger"}, StageRunner::Ranks::First, [&] {

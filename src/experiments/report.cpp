@@ -132,7 +132,11 @@ void dagger_section(Document& d, const ReportInputs& in) {
       "network drives into (every " +
       std::to_string(o.stride) +
       " steps), adds those labels to the expert's data and retrains the "
-      "network; round 0 is the model above. mlp-miqp is then scored on " +
+      "networks. The policy is an ensemble: the mean action of " +
+      std::to_string(o.train.network.networks) +
+      " networks of the paper's shape, each from its own seed (docs/learning.md), because one "
+      "network's seed moved the take-overs as much as a round's labels did; round 0 is the "
+      "model above with that ensemble in place of its one network. mlp-miqp is then scored on " +
       std::to_string(o.eval_count) + " held-out scenes of all behaviors (seed " +
       std::to_string(o.eval_seed) +
       "), and miqp once on the same scenes, both with the step budget lifted as for the "

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <nlohmann/json.hpp>
 
 #include "lanechange/baselines/baselines.hpp"
 #include "lanechange/dagger/dagger.hpp"
@@ -63,11 +64,25 @@ TEST(Experiments, ATinyRunWritesEveryTableAndFigureAndARerunReusesItsStages) {
     ++pictures;
   }
   EXPECT_GE(pictures, 5);  // confusion matrix, success bars, step times, DAgger, an example
-  // DAgger's round 0 is the experiments' model, and its round 1 a data set of labels.
+  // DAgger's round 0 is the experiments' model with an ensemble whose first
+  // network is the model's one, and its round 1 a data set of labels.
   EXPECT_TRUE(fs::exists(fs::path(o.out_dir) / "figures/dagger.png"));
   EXPECT_TRUE(fs::exists(fs::path(o.out_dir) / "dagger/rounds/model-1/model.json"));
-  EXPECT_EQ(testing::read_text(o.out_dir + "/dagger/rounds/model-0/model.json"),
-            testing::read_text(o.out_dir + "/model/model.json"));
+  const std::string round0 = o.out_dir + "/dagger/rounds/model-0";
+  const auto json_in = [](const std::string& path) {
+    return nlohmann::json::parse(testing::read_text(path));
+  };
+  EXPECT_EQ(json_in(round0 + "/model.json")["classifiers"],
+            json_in(o.out_dir + "/model/model.json")["classifiers"]);
+  const auto base_scores = json_in(o.out_dir + "/model/metrics.json")["classifiers"];
+  for (const auto& [name, scores] : json_in(round0 + "/metrics.json")["classifiers"].items()) {
+    EXPECT_EQ(scores["confusion_counts"], base_scores[name]["confusion_counts"]) << name;
+  }
+  EXPECT_EQ(testing::read_text(round0 + "/strategy.json"),
+            testing::read_text(o.out_dir + "/model/strategy.json"));
+  const auto members = json_in(round0 + "/policy.json")["average_of"];
+  ASSERT_EQ(members.size(), 3U);
+  EXPECT_EQ(members[0], json_in(o.out_dir + "/model/policy.json"));
   const auto rows = dagger::read_report(o.out_dir + "/dagger/rounds");
   ASSERT_EQ(rows.rounds.size(), 2U);
   EXPECT_EQ(rows.rounds[1].round, 1);
