@@ -122,14 +122,14 @@ void dagger_section(Document& d, const ReportInputs& in) {
   d.heading(2, "DAgger for the action network (beyond the paper)");
   d.paragraph(
       "The paper names DAgger (Ross et al. 2011) as future work (docs/strategy.md). Each round "
-      "rolls the last round's network out " +
+      "rolls the last round's policy out " +
       std::string(o.rollout == dagger::Rollout::Gated
                       ? "under mlp-miqp's check (labels up to the take-over)"
                       : "on its own (no take-over)") +
       " on those of " + std::to_string(o.scenes) + " fresh training scenes (seed " +
       std::to_string(o.scene_seed) +
       " on) that the classifier lets it drive, has the closed-loop expert label the states the "
-      "network drives into (every " +
+      "policy drives into (every " +
       std::to_string(o.stride) +
       " steps), adds those labels to the expert's data and retrains the "
       "networks. The policy is an ensemble: the mean action of " +

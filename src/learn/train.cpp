@@ -245,6 +245,14 @@ std::pair<Standardizer, Standardizer> network_standardizers(const Context& c,
   return {Standardizer{w.input_mean, w.input_scale}, Standardizer{w.output_mean, w.output_scale}};
 }
 
+// Checked before any training: a retrain reads the count from its base's model.json.
+void require_network_count(int networks, const std::string& where) {
+  if (networks < 1 || networks > kMaxNetworks) {
+    throw InputError(where, "networks must be 1.." + std::to_string(kMaxNetworks) + ", not " +
+                                std::to_string(networks));
+  }
+}
+
 // An ensemble's networks, on the same rows, on up to `jobs` threads; one
 // network is the paper's.
 std::vector<TrainedNetwork> train_members(const Context& c, const Eigen::MatrixXd& x,
@@ -488,9 +496,7 @@ json TrainOptions::config() const {
 
 TrainReport train_models(const TrainOptions& options) {
   const auto start = Clock::now();
-  if (options.network.networks < 1 || options.network.networks > kMaxNetworks) {
-    throw InputError("--networks", "must be 1.." + std::to_string(kMaxNetworks));
-  }
+  require_network_count(options.network.networks, "--networks");
   check_out_dir(options.out_dir);
   const LearningData data = load_learning_data(options.data_dirs);
   const Split split = split_scenarios(data.scenarios.rows(), options.test_share, options.seed);
@@ -568,6 +574,7 @@ TrainReport retrain_network(const RetrainOptions& options) {
   train.network.hidden_width = base_network.value("hidden_width", kHiddenWidth);
   // An ensemble's rounds are ensembles of its size.
   train.network.networks = base_network.value("networks", 1);
+  require_network_count(train.network.networks, options.base_model);
   if (train.network.networks > 1 && !options.warm_start.empty()) {
     throw InputError(options.warm_start,
                      "a fine-tune starts from one network, and the base model "

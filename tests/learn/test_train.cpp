@@ -312,6 +312,16 @@ TEST_F(Trained, AnEnsembleAveragesItsNetworksAndARetrainKeepsItsSize) {
   EXPECT_THROW((void)retrain_network(o), InputError);
   EXPECT_FALSE(fs::exists(o.out_dir));
 
+  // A base whose model.json names an impossible ensemble is refused, not trained.
+  const fs::path edited = root_ / "ensemble_edited";
+  fs::copy(out, edited, fs::copy_options::recursive);
+  json description = json::parse(testing::read_text((edited / "model.json").string()));
+  description["config"]["network"]["networks"] = 0;
+  testing::write_text((edited / "model.json").string(), description.dump());
+  RetrainOptions from_edited = quick_retrain(edited.string(), (root_ / "edited_out").string());
+  EXPECT_THROW((void)retrain_network(from_edited), InputError);
+  EXPECT_FALSE(fs::exists(from_edited.out_dir));
+
   const auto before = snapshot(out);
   const auto bad = testing::run_cli(train_args(out) + " --networks 0");
   EXPECT_EQ(bad.exit_code, 2) << bad.output;
