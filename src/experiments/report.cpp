@@ -136,15 +136,22 @@ void dagger_section(Document& d, const ReportInputs& in) {
       std::to_string(o.train.network.networks) +
       " networks of the paper's shape, each from its own seed (docs/learning.md), because one "
       "network's seed moved the take-overs as much as a round's labels did; round 0 is the "
-      "model above with that ensemble in place of its one network. mlp-miqp is then scored on " +
-      std::to_string(o.eval_count) + " held-out scenes of all behaviors (seed " +
-      std::to_string(o.eval_seed) +
+      "model above with that ensemble in place of its one network. " +
+      std::string(o.average ? "Round r's policy is the mean of the ensembles of rounds 0 to r "
+                              "(each retrained on every label so far): the deterministic form of "
+                              "the mixture of the rounds' policies, for which DAgger's guarantee "
+                              "holds. "
+                            : "") +
+      "mlp-miqp is then scored on " + std::to_string(o.eval_count) +
+      " held-out scenes of all behaviors (seed " + std::to_string(o.eval_seed) +
       "), and miqp once on the same scenes, both with the step budget lifted as for the "
       "labels, so that the rounds' scores do not depend on the machine's load (Table II's are "
       "timed). \"Network drives\" counts the held-out rollouts the "
       "classifier lets the network drive; of those, the check takes some over at the network's "
       "first step (the scene's own start) and some later. The same run alone: "
-      "`lanechange train --data DATA... --dagger R` (docs/strategy.md).");
+      "`lanechange train --data DATA... --networks " +
+      std::to_string(o.train.network.networks) + " --dagger R" +
+      (o.average ? " --dagger-average" : "") + "` (docs/strategy.md).");
   d.table(dagger_table(*in.dagger));
   d.bullets(dagger_verdicts(*in.dagger));
   d.figure("figures/dagger.png", "DAgger: mlp-miqp's success and take-overs per round.");

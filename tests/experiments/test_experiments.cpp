@@ -83,6 +83,12 @@ TEST(Experiments, ATinyRunWritesEveryTableAndFigureAndARerunReusesItsStages) {
   const auto members = json_in(round0 + "/policy.json")["average_of"];
   ASSERT_EQ(members.size(), 3U);
   EXPECT_EQ(members[0], json_in(o.out_dir + "/model/policy.json"));
+  // Round 1's policy is the mean of both rounds' ensembles: round 0's
+  // networks first, then its own three.
+  const auto round1 = json_in(o.out_dir + "/dagger/rounds/model-1/policy.json")["average_of"];
+  ASSERT_EQ(round1.size(), 6U);
+  for (std::size_t k = 0; k < members.size(); ++k) EXPECT_EQ(round1[k], members[k]) << k;
+  EXPECT_NE(round1[3], members[0]);
   const auto rows = dagger::read_report(o.out_dir + "/dagger/rounds");
   ASSERT_EQ(rows.rounds.size(), 2U);
   EXPECT_EQ(rows.rounds[1].round, 1);
