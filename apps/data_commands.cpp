@@ -1,10 +1,9 @@
 // `generate` and `dataset-info` (docs/dataset.md).
-#include "data_commands.hpp"
-
 #include <unistd.h>
 
 #include <iostream>
 
+#include "commands.hpp"
 #include "lanechange/data/dataset.hpp"
 #include "lanechange/error.hpp"
 #include "team.hpp"
@@ -16,7 +15,7 @@ namespace {
 struct GenerateArgs {
   long long count = 0;
   std::uint64_t seed = 0;
-  std::string behavior = "all";
+  std::string behavior;
   std::string out_dir;
   int jobs = 0;
   std::string solver = "fast";
@@ -30,7 +29,7 @@ data::GenerateOptions to_options(const GenerateArgs& a, const ConfigSource& glob
   data::GenerateOptions o;
   o.count = a.count;
   o.seed = a.seed;
-  if (a.behavior != "all") o.behavior = behavior_from_string(a.behavior, "--behavior");
+  o.behavior = behavior_option(a.behavior);
   o.out_dir = a.out_dir;
   o.solver = a.solver;
   o.shard_size = a.shard_size;
@@ -40,7 +39,7 @@ data::GenerateOptions to_options(const GenerateArgs& a, const ConfigSource& glob
   return o;
 }
 
-void report_done(const data::GenerateReport& r, const data::Team& team, const std::string& dir) {
+void report_done(const data::GenerateReport& r, const run::Team& team, const std::string& dir) {
   if (team.rank() != 0) return;
   if (r.already_complete) {
     std::cerr << dir << " is already complete; nothing to do\n";
@@ -58,12 +57,12 @@ void run_generate(const GenerateArgs& args, const ConfigSource& config) {
   const auto team = make_team();
   data::RunOptions run;
   run.jobs = args.jobs;
+  run.team = team.get();
   if (team->rank() == 0) {
     run.progress = &std::cerr;
     run.progress_on_terminal = ::isatty(STDERR_FILENO) != 0;
   }
-  run_on_team(*team,
-              [&] { report_done(data::generate(options, run, *team), *team, options.out_dir); });
+  run_on_team(*team, [&] { report_done(data::generate(options, run), *team, options.out_dir); });
 }
 
 }  // namespace
@@ -71,29 +70,28 @@ void run_generate(const GenerateArgs& args, const ConfigSource& config) {
 void add_generate(CLI::App& app, const ConfigSource& config) {
   auto* cmd = app.add_subcommand(
       "generate", "Plan N sampled scenarios with the expert and write a data set (resumable)");
-  static GenerateArgs args;
-  cmd->add_option("--count", args.count, "How many scenarios")->required();
-  cmd->add_option("--seed", args.seed, "Sampler seed")->required();
-  cmd->add_option("--out", args.out_dir, "Data set directory (created; resumed if it exists)")
+  auto a = make_args<GenerateArgs>();
+  cmd->add_option("--count", a->count, "How many scenarios")->required();
+  cmd->add_option("--seed", a->seed, "Sampler seed")->required();
+  cmd->add_option("--out", a->out_dir, "Data set directory (created; resumed if it exists)")
       ->required();
-  cmd->add_option("--behavior", args.behavior,
-                  "constant_speed, constant_accel, idm, or all (drawn per scenario)");
-  cmd->add_option("--jobs", args.jobs, "Worker threads per process (default: all cores)")
+  add_behavior_option(*cmd, a->behavior);
+  cmd->add_option("--jobs", a->jobs, "Worker threads per process (default: all cores)")
       ->check(CLI::Range(0, 1024));
-  cmd->add_option("--solver", args.solver, "MIQP back-end: fast (ours) or reference (Bonmin)");
-  cmd->add_option("--config", args.config_path, "Config JSON file (overrides the global one)");
-  cmd->add_option("--steps", args.steps, "Override N, the plan's steps (cheaper data)")
+  cmd->add_option("--solver", a->solver, "MIQP back-end: fast (ours) or reference (Bonmin)");
+  cmd->add_option("--config", a->config_path, "Config JSON file (overrides the global one)");
+  cmd->add_option("--steps", a->steps, "Override N, the plan's steps (cheaper data)")
       ->check(CLI::Range(2, 10000));
-  cmd->add_option("--shard-size", args.shard_size, "Scenarios per shard file");
-  cmd->add_option("--time-limit", args.time_limit, "Seconds per plan");
-  cmd->callback([config] { run_generate(args, config); });
+  cmd->add_option("--shard-size", a->shard_size, "Scenarios per shard file");
+  cmd->add_option("--time-limit", a->time_limit, "Seconds per plan");
+  cmd->callback([a, config] { run_generate(*a, config); });
 }
 
 void add_dataset_info(CLI::App& app) {
   auto* cmd = app.add_subcommand("dataset-info", "Counts and solve times of a data set");
-  static std::string dir;
-  cmd->add_option("dir", dir, "Data set directory")->required();
-  cmd->callback([] { data::print_summary(data::summarize_dataset(dir), std::cout); });
+  auto dir = make_args<std::string>();
+  cmd->add_option("--data", *dir, "Data set directory")->required();
+  cmd->callback([dir] { data::print_summary(data::summarize_dataset(*dir), std::cout); });
 }
 
 }  // namespace lanechange::app

@@ -6,24 +6,24 @@
 #include <memory>
 #include <stdexcept>
 
-#include "lanechange/data/dataset.hpp"
 #include "lanechange/error.hpp"
+#include "lanechange/run/team.hpp"
 
 namespace lanechange::app {
 
 /// MPI is initialised only when a launcher started us (it sets
 /// OMPI_COMM_WORLD_SIZE, PMI_SIZE or PMIX_RANK): a plain run of the CLI then
 /// pays nothing for it. Finalised when the team is destroyed.
-[[nodiscard]] std::unique_ptr<data::Team> make_team();
+[[nodiscard]] std::unique_ptr<run::Team> make_team();
 
 /// Ends every rank with this exit code; a rank that fails alone would
 /// leave the others waiting at the barrier forever.
-[[noreturn]] void abort_team(data::Team& team, int code);
+[[noreturn]] void abort_team(run::Team& team, int code);
 
 /// Runs `job` on this rank. Bad input is the same on every rank, so each
 /// stops by itself (exit code 2 through the caller); any other error on one
 /// rank ends them all, since the others would wait for it forever.
-inline void run_on_team(data::Team& team, const std::function<void()>& job) {
+inline void run_on_team(run::Team& team, const std::function<void()>& job) {
   try {
     job();
   } catch (const InputError&) {

@@ -15,7 +15,7 @@ bool started_by_launcher() {
   return false;
 }
 
-class MpiTeam final : public data::Team {
+class MpiTeam final : public run::Team {
  public:
   MpiTeam() {
     // Only the main thread talks to MPI; the workers only plan and write.
@@ -43,12 +43,12 @@ class MpiTeam final : public data::Team {
 
 }  // namespace
 
-std::unique_ptr<data::Team> make_team() {
-  if (!started_by_launcher()) return std::make_unique<data::Team>();
+std::unique_ptr<run::Team> make_team() {
+  if (!started_by_launcher()) return std::make_unique<run::Team>();
   return std::make_unique<MpiTeam>();
 }
 
-void abort_team(data::Team& team, int code) {
+void abort_team(run::Team& team, int code) {
   if (team.size() > 1) MPI_Abort(MPI_COMM_WORLD, code);
   std::exit(code);
 }

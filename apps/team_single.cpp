@@ -5,9 +5,9 @@
 
 namespace lanechange::app {
 
-std::unique_ptr<data::Team> make_team() { return std::make_unique<data::Team>(); }
+std::unique_ptr<run::Team> make_team() { return std::make_unique<run::Team>(); }
 
-void abort_team(data::Team&, int code) { std::exit(code); }
+void abort_team(run::Team&, int code) { std::exit(code); }
 
 bool mpi_available() { return false; }
 

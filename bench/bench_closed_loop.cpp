@@ -60,7 +60,7 @@ void BM_MlpMiqpStep(benchmark::State& state) {
 }
 void BM_MlpMiqpStepRolledOutEveryStep(benchmark::State& state) { run_mlp_miqp(state, 0.0); }
 
-// strategy-qp's re-plans (issue 14's 0.5 ms per plan): the same model
+// strategy-qp's re-plans (target: 0.5 ms per plan): the same model
 // directory, its strategy part.
 void BM_StrategyQpStep(benchmark::State& state) { run_learned(state, "strategy-qp"); }
 

@@ -45,13 +45,12 @@ void BM_Generate(benchmark::State& state) {
   const lc::data::GenerateOptions o = options(dir);
   lc::data::RunOptions run;
   run.jobs = jobs;
-  lc::data::Team alone;
   double seconds = 0.0;
   for (auto _ : state) {
     state.PauseTiming();
     std::filesystem::remove_all(dir);
     state.ResumeTiming();
-    const auto report = lc::data::generate(o, run, alone);
+    const auto report = lc::data::generate(o, run);
     seconds += report.wall_s;
   }
   std::filesystem::remove_all(dir);

@@ -142,8 +142,8 @@ void BM_FastSolve(benchmark::State& state) {
 }
 
 // The same solves with every node QP's Riccati pass in square-root form
-// (the default before stop 25), and with dense products of every stage's A
-// and B (before stop 30), for the ratios in the same run.
+// and with dense products of every stage's A and B, for the ratios in the
+// same run.
 void BM_FastSolveSquareRoot(benchmark::State& state) {
   solve_all(state, ex::FastLaneChangeSolver{}, reference_scenarios(),
             g_samples.square_root_solve_ms, NodeQpSteps{ex::RiccatiForm::SquareRoot, true});

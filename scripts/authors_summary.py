@@ -3,8 +3,8 @@
 
     scripts/authors_summary.py RUN_DIR [RECORDS_JSONL] [--baseline OTHER_RUN_DIR]
 
-RUN_DIR holds comparisons.jsonl, as written by the test
-AuthorsComparison.DISABLED_AllRecords. With the records file, the shares are
+RUN_DIR holds comparisons.jsonl, as written by
+`lanechange authors-study`. With the records file, the shares are
 also given per distinct scenario (the 1283 records hold 669 distinct
 scenarios: many cells of data2..data8.mat repeat one another). With a
 baseline run, the records whose verdict changed are listed.

@@ -200,7 +200,7 @@ struct ClosedLoopSettings {
   /// s: the lane keeper also keeps up with a faster car behind it in its lane
   /// that would come within IDM's gap (s0 + v T) within this time (the other
   /// cars ignore the ego), as far as the car ahead and the ego's limits allow
-  /// (docs/closed_loop.md); 0: the car ahead alone, as until stop 31.
+  /// (docs/closed_loop.md); 0: the car ahead alone.
   double keeper_rear_horizon = 5.0;
   /// rad: the largest heading of the fallback's return to the ego lane while
   /// its body is still in the target lane (a cut-in backed out of). The
@@ -304,13 +304,13 @@ struct StrategyQpSettings {
   /// `candidates` of them that lane_modes_can_hold does not refuse at their
   /// first linearization are the plan's candidates: a vote the reachable
   /// states rule out then costs no QP and takes no place. At most
-  /// `candidates`: no check (docs/strategy.md, stop 26).
+  /// `candidates`: no check (docs/strategy.md).
   int vote_pool = 15;
   /// Where the last plan's modes go first (a re-plan in closed loop), the
   /// votes screened beside them: alternatives to a plan that held a step
   /// ago. 3 instead of `candidates`' 5 takes a sixth off the median planned
   /// step (0.56 -> 0.46 ms) with the same closed-loop success
-  /// (docs/strategy.md, stop 27). At least 1.
+  /// (docs/strategy.md). At least 1.
   int replan_candidates = 3;
   /// Rank the candidates by one QP each at the first round's linearization,
   /// run the rounds for them in that order and follow the first that
@@ -320,14 +320,14 @@ struct StrategyQpSettings {
   /// collision-free, and the cheapest of them is followed. 1 is about 35%
   /// faster per plan (a median cost 1.007 of the optimum against 1.004-1.006)
   /// but drove into 2 at-fault collisions in 500 closed-loop rollouts where 2
-  /// drove into none (docs/strategy.md, stop 24).
+  /// drove into none (docs/strategy.md).
   int screen_keep = 2;
   /// Screen with rough QPs (FixedModeSettings::rough): about half the
   /// iterations, and only the ranking depends on them.
   bool rough_screen = true;
   /// Where a rough screen QP stops (complementarity, rows and slack): 1e-2
   /// takes about a sixth fewer iterations per plan than 1e-3, at a median
-  /// cost 0.0002 higher (docs/strategy.md, stop 26). In (0, 1).
+  /// cost 0.0002 higher (docs/strategy.md). In (0, 1).
   double screen_tolerance = 1e-2;
   /// Stop a candidate's screen QP once its lower bound passes the cheapest
   /// screened so far (MiqpSettings::objective_cutoff): it ranks after it

@@ -1,4 +1,4 @@
-// DAgger's data collection (docs/strategy.md, "DAgger"). The learner is the
+// DAgger's data collection (docs/dagger.md). The learner is the
 // bare action network (classic DAgger rolls the learner out), or the network
 // under mlp-miqp's check, whose take-over ends the labels (HG-DAgger).
 #include "dagger/collect.hpp"
@@ -9,8 +9,8 @@
 #include <optional>
 #include <thread>
 
-#include "lanechange/data/progress.hpp"
 #include "lanechange/expert/lane_change_solver.hpp"
+#include "lanechange/run/progress.hpp"
 #include "lanechange/sampler.hpp"
 #include "lanechange/sim/simulator.hpp"
 #include "planner/miqp_planner.hpp"
@@ -21,7 +21,7 @@ namespace {
 
 // Node 0 of the plan from now is the observation's state; the plan's clock
 // starts there, so its times move by the rollout's.
-Query first_nodes(data::detail::PlanOutcome outcome, double t, int nodes) {
+Query first_nodes(data::PlanOutcome outcome, double t, int nodes) {
   Trajectory& path = outcome.trajectory;
   if (nodes > 0 && path.nodes() > nodes) {
     const auto keep = static_cast<std::size_t>(nodes);
@@ -55,13 +55,13 @@ class StrategyLabeller {
 
   // The plan from `now` (the scene at `step`) with the start's modes; none
   // when the start had no converged plan.
-  [[nodiscard]] std::optional<data::detail::PlanOutcome> label(const Scenario& now, int step,
-                                                               double time_limit_s) const {
+  [[nodiscard]] std::optional<data::PlanOutcome> label(const Scenario& now, int step,
+                                                       double time_limit_s) const {
     if (plan_.status != expert::PlanStatus::Converged) return std::nullopt;
     const double dt = now.horizon / now.steps;
     const std::vector<int> modes = planner::shifted(plan_.modes, step, now.steps);
     const expert::Iterate guess = planner::shifted(plan_.path, step, now.steps, dt);
-    return data::detail::plan_outcome(fixed_, now, time_limit_s, {&guess, &modes, false});
+    return data::plan_outcome(fixed_, now, time_limit_s, {&guess, &modes, false});
   }
 
  private:
@@ -154,8 +154,8 @@ class LearnerSession final : public planner::PlannerSession {
         return first_nodes(std::move(*fixed), o.t, labelling_.nodes);
       }
     }
-    return first_nodes(data::detail::plan_outcome(learner_.expert(), now, labelling_.time_limit_s),
-                       o.t, labelling_.nodes);
+    return first_nodes(data::plan_outcome(learner_.expert(), now, labelling_.time_limit_s), o.t,
+                       labelling_.nodes);
   }
 
   void label(const planner::Observation& o) { sink_.push_back(plan_at(o)); }
@@ -221,7 +221,7 @@ RoundData collect_round(const CollectJob& job, const std::string& dir, long long
   std::vector<std::vector<Query>> per_scene(static_cast<std::size_t>(job.scenes));
   std::atomic<long long> next{0};
   std::atomic<long long> refused{0};
-  data::Progress progress(job.progress, false, job.scenes, -1.0, "dagger", "learner rollouts");
+  run::Progress progress(job.progress, false, job.scenes, -1.0, "dagger", "learner rollouts");
   auto work = [&] {
     for (long long i = next++; i < job.scenes; i = next++) {
       const auto scene_index = static_cast<std::uint64_t>(job.first_scene + i);
@@ -245,7 +245,7 @@ RoundData collect_round(const CollectJob& job, const std::string& dir, long long
   RoundData out;
   out.range = {shard, first_index, 0};
   out.refused = refused;
-  data::detail::ShardFiles files(dir, shard);
+  data::ShardFiles files(dir, shard);
   for (long long i = 0; i < job.scenes; ++i) {
     const auto scene_index = static_cast<std::uint64_t>(job.first_scene + i);
     const Scenario scene = sampler.sample(scene_index);
@@ -255,8 +255,8 @@ RoundData collect_round(const CollectJob& job, const std::string& dir, long long
         ++out.labelled;
         out.samples += query.outcome.trajectory.nodes();
       }
-      files.write(data::detail::scenario_rows(index, scenario_seed(job.scene_seed, scene_index),
-                                              scene, query.outcome));
+      files.write(data::scenario_rows(index, scenario_seed(job.scene_seed, scene_index), scene,
+                                      query.outcome));
     }
   }
   files.commit();

@@ -17,13 +17,13 @@ namespace lanechange::dagger::detail {
 /// measure what the network learnt, not the machine: under a budget a loaded
 /// machine cuts the take-over's plans short and hands steps to the fallback,
 /// which moved one model's take-overs by up to 0.014 per rollout between
-/// scorings (docs/strategy.md, stop 35).
+/// scorings (docs/dagger.md).
 [[nodiscard]] Config untimed(const Config& config);
 
 /// The expert's plan from one visited state, cut to its first nodes: node 0
 /// holds the observation's inputs and the control the expert applies there.
 struct Query {
-  data::detail::PlanOutcome outcome;
+  data::PlanOutcome outcome;
 };
 
 /// Which states the expert labels, and how much of its plan is kept.
@@ -31,8 +31,8 @@ struct Labelling {
   int stride = 1;  ///< every stride-th step the network drives
   int nodes = 1;   ///< of each plan, from node 0; 0: the whole plan
   double time_limit_s = 60.0;
-  /// Roll out on scenes the classifier refuses too (the first version's
-  /// behaviour); by default only where mlp-miqp would let the network drive.
+  /// Roll out on scenes the classifier refuses too; by default only where
+  /// mlp-miqp would let the network drive.
   bool every_scene = false;
   /// The learner drives with mlp-miqp's check, and the labels end at the
   /// take-over (DaggerOptions::rollout).
@@ -68,10 +68,10 @@ struct Labelling {
                                                const Config& config, const Labelling& labelling);
 
 struct RoundData {
-  data::detail::ShardRange range;  ///< the shard written
-  long long labelled = 0;          ///< queries answered with a well-posed plan
-  long long samples = 0;           ///< rows of those plans in the samples file
-  long long refused = 0;           ///< scenes the classifier refused (not rolled out)
+  data::ShardRange range;  ///< the shard written
+  long long labelled = 0;  ///< queries answered with a well-posed plan
+  long long samples = 0;   ///< rows of those plans in the samples file
+  long long refused = 0;   ///< scenes the classifier refused (not rolled out)
 };
 
 /// Collects the labels of scenes [first_scene, first_scene + scenes) on

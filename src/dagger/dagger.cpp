@@ -1,4 +1,4 @@
-// DAgger rounds (docs/strategy.md, "DAgger"): round 0 is the model trained
+// DAgger rounds (docs/dagger.md): round 0 is the model trained
 // on the expert's data; round r rolls round r-1's network out on fresh
 // training scenes, has the expert label the states it visits, adds them to
 // the aggregated data set and trains the network again on everything. Each
@@ -19,6 +19,7 @@
 #include "lanechange/error.hpp"
 #include "lanechange/expert/lane_change_solver.hpp"
 #include "lanechange/learn/model.hpp"
+#include "lanechange/run/markdown.hpp"
 #include "lanechange/sampler.hpp"
 #include "lanechange/sim/evaluate.hpp"
 #include "planner/mlp_miqp_planner.hpp"
@@ -53,33 +54,33 @@ void require(bool ok, const char* field, const std::string& problem) {
 }
 
 void validate(const DaggerOptions& o) {
-  require(o.rounds >= 0 && o.rounds <= 100, "--dagger", "rounds must be in [0, 100]");
-  require(o.scenes >= 1, "--dagger-scenes", "must be at least 1");
-  require(o.stride >= 1, "--dagger-stride", "must be at least 1");
-  require(o.label_nodes >= 0, "--dagger-label-nodes", "must be at least 0 (0: whole plans)");
-  require(o.past_takeover_s >= 0.0 && o.past_takeover_s <= 60.0, "--dagger-past-takeover",
+  require(o.rounds >= 0 && o.rounds <= 100, "--rounds", "rounds must be in [0, 100]");
+  require(o.scenes >= 1, "--scenes", "must be at least 1");
+  require(o.stride >= 1, "--stride", "must be at least 1");
+  require(o.label_nodes >= 0, "--label-nodes", "must be at least 0 (0: whole plans)");
+  require(o.past_takeover_s >= 0.0 && o.past_takeover_s <= 60.0, "--past-takeover",
           "must be in [0, 60] s");
-  require(o.past_takeover_s == 0.0 || o.rollout == Rollout::Gated, "--dagger-past-takeover",
-          "only goes with --dagger-rollout gated");
-  require(!o.label_lookahead || o.rollout == Rollout::Gated, "--dagger-label-lookahead",
-          "only goes with --dagger-rollout gated");
-  require(o.beta >= 0.0 && o.beta <= 1.0, "--dagger-beta", "must be in [0, 1]");
-  require(o.beta == 0.0 || o.rollout == Rollout::Network, "--dagger-beta",
-          "only goes with --dagger-rollout network: gated rollouts hand steps to the expert "
+  require(o.past_takeover_s == 0.0 || o.rollout == Rollout::Gated, "--past-takeover",
+          "only goes with --rollout gated");
+  require(!o.label_lookahead || o.rollout == Rollout::Gated, "--label-lookahead",
+          "only goes with --rollout gated");
+  require(o.beta >= 0.0 && o.beta <= 1.0, "--beta", "must be in [0, 1]");
+  require(o.beta == 0.0 || o.rollout == Rollout::Network, "--beta",
+          "only goes with --rollout network: gated rollouts hand steps to the expert "
           "at the take-over");
-  require(o.retrain_learning_rate >= 0.0 && o.retrain_learning_rate <= 1.0,
-          "--dagger-learning-rate", "must be in [0, 1] (0: round 0's)");
-  require(o.eval_count >= 1, "--dagger-eval-count", "must be at least 1");
-  require(o.candidates >= 1 && o.candidates <= 20, "--dagger-candidates", "must be in [1, 20]");
-  require(o.select_count >= 1, "--dagger-select-count", "must be at least 1");
+  require(o.retrain_learning_rate >= 0.0 && o.retrain_learning_rate <= 1.0, "--learning-rate",
+          "must be in [0, 1] (0: round 0's)");
+  require(o.eval_count >= 1, "--eval-count", "must be at least 1");
+  require(o.candidates >= 1 && o.candidates <= 20, "--candidates", "must be in [1, 20]");
+  require(o.select_count >= 1, "--select-count", "must be at least 1");
   require(o.candidates == 1 || (o.select_seed != o.eval_seed && o.select_seed != o.scene_seed),
-          "--dagger-select-seed",
-          "must differ from --dagger-eval-seed and --dagger-seed: selection scenes are neither "
+          "--select-seed",
+          "must differ from --eval-seed and --scene-seed: selection scenes are neither "
           "held out nor labelled");
-  require(o.eval_seed != o.scene_seed, "--dagger-eval-seed",
-          "must differ from --dagger-seed: the evaluation scenes must be held out");
+  require(o.eval_seed != o.scene_seed, "--eval-seed",
+          "must differ from --scene-seed: the evaluation scenes must be held out");
   require(o.label_time_limit_s > 0.0, "label_time_limit_s", "must be positive");
-  require(!o.work_dir.empty(), "--dagger-dir", "must not be empty");
+  require(!o.work_dir.empty(), "--dir", "must not be empty");
   require(!o.train.out_dir.empty(), "--out", "must not be empty");
   require(!o.train.data_dirs.empty(), "--data", "at least one data set is needed");
   const fs::path out(o.train.out_dir);
@@ -131,14 +132,14 @@ void prepare_work_dir(const DaggerOptions& o) {
   const json parameters = run_parameters(o);
   if (fs::exists(file)) {
     if (lanechange::detail::read_json_file(file.string()) != parameters) {
-      throw InputError("--dagger-dir", o.work_dir +
-                                           " holds a DAgger run with other parameters; use a new "
-                                           "directory or the same options");
+      throw InputError("--dir", o.work_dir +
+                                    " holds a DAgger run with other parameters; use a new "
+                                    "directory or the same options");
     }
     return;
   }
   if (fs::exists(o.work_dir) && !fs::is_empty(o.work_dir)) {
-    throw InputError("--dagger-dir", o.work_dir + " is not empty and holds no DAgger run");
+    throw InputError("--dir", o.work_dir + " is not empty and holds no DAgger run");
   }
   fs::create_directories(o.work_dir);
   lanechange::detail::write_file_atomically(file.string(), parameters.dump(2) + "\n");
@@ -225,7 +226,7 @@ RoundRow evaluate(const DaggerOptions& o, Scenes scenes, const std::string& plan
 // NOLINTNEXTLINE(bugprone-exception-escape)
 struct Aggregate {
   json parameters;
-  std::vector<data::detail::ShardRange> shards;
+  std::vector<data::ShardRange> shards;
   std::vector<long long> labelled;
   std::vector<long long> samples;  // well-posed rows
   [[nodiscard]] long long count() const {
@@ -236,7 +237,7 @@ struct Aggregate {
 Aggregate read_aggregate(const DaggerOptions& o) {
   Aggregate a;
   const json data_config =
-      data::detail::read_manifest(o.train.data_dirs.front()).at("parameters").at("config");
+      data::read_manifest(o.train.data_dirs.front()).at("parameters").at("config");
   const json closed_loop = o.config;
   a.parameters = {{"version", LANECHANGE_VERSION},
                   {"count", 0},
@@ -259,8 +260,8 @@ Aggregate read_aggregate(const DaggerOptions& o) {
                     {"shards", json::array()}}}};
   if (o.fixed_strategy) a.parameters["dagger"]["fixed_strategy"] = true;
   if (!fs::exists(fs::path(data_dir(o)) / data::kManifestName)) return a;
-  data::detail::remove_stale_temporaries(data_dir(o));  // a killed round's shard
-  const json old = data::detail::read_manifest(data_dir(o)).at("parameters");
+  data::remove_stale_temporaries(data_dir(o));  // a killed round's shard
+  const json old = data::read_manifest(data_dir(o)).at("parameters");
   for (const json& s : old.at("dagger").at("shards")) {
     a.shards.push_back({s.at("index").get<long long>(), s.at("first").get<long long>(),
                         s.at("count").get<long long>()});
@@ -313,7 +314,7 @@ void add_round(Aggregate& a, const DaggerOptions& o, int round, std::ostream* pr
   char host[256] = {};
   (void)::gethostname(host, sizeof host - 1);
   const json run = {{"host", host}, {"ranks", 1}, {"jobs_per_rank", o.jobs}};
-  data::detail::write_manifest_of_shards(data_dir(o), a.parameters, run, a.shards);
+  data::write_manifest_of_shards(data_dir(o), a.parameters, run, a.shards);
   if (progress != nullptr) {
     *progress << "dagger: round " << round << ": " << o.scenes - got.refused
               << " scenes rolled out, " << got.range.count << " expert queries, " << got.labelled
@@ -444,25 +445,28 @@ std::vector<std::string> table_columns() {
 }
 
 std::string markdown_table(const DaggerReport& report) {
-  std::string md =
-      "| round | planner | rollouts | success | take-overs per rollout | collisions | at-fault "
-      "collisions | network drives | taken over at the start | taken over later | new "
-      "well-posed labels | DAgger samples so far |\n"
-      "|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+  run::Table table{
+      {"round", "planner", "rollouts", "success", "take-overs per rollout", "collisions",
+       "at-fault collisions", "network drives", "taken over at the start", "taken over later",
+       "new well-posed labels", "DAgger samples so far"},
+      {}};
   std::vector<RoundRow> rows = report.rounds;
   rows.push_back(report.expert);
-  char line[256];
+  const auto format = [](const char* pattern, double value) {
+    char text[32];
+    std::snprintf(text, sizeof text, pattern, value);
+    return std::string(text);
+  };
   for (const RoundRow& r : rows) {
-    std::snprintf(
-        line, sizeof line,
-        "| %s | %s | %lld | %.1f%% | %.2f | %.1f%% | %.1f%% | %lld | %lld | %lld | %lld | %lld |\n",
-        r.round < 0 ? "-" : std::to_string(r.round).c_str(), r.planner.c_str(), r.rollouts,
-        100.0 * r.success_rate, r.takeovers_per_rollout, 100.0 * r.collision_rate,
-        100.0 * r.at_fault_collision_rate, r.driven, r.taken_over_at_start, r.taken_over_later,
-        r.labels, r.dagger_samples);
-    md += line;
+    table.rows.push_back(
+        {r.round < 0 ? "-" : std::to_string(r.round), r.planner, std::to_string(r.rollouts),
+         format("%.1f%%", 100.0 * r.success_rate), format("%.2f", r.takeovers_per_rollout),
+         format("%.1f%%", 100.0 * r.collision_rate),
+         format("%.1f%%", 100.0 * r.at_fault_collision_rate), std::to_string(r.driven),
+         std::to_string(r.taken_over_at_start), std::to_string(r.taken_over_later),
+         std::to_string(r.labels), std::to_string(r.dagger_samples)});
   }
-  return md;
+  return run::markdown(table);
 }
 
 DaggerReport read_report(const std::string& work_dir) {

@@ -12,13 +12,11 @@
 #include "data/manifest.hpp"
 #include "data/shard.hpp"
 #include "lanechange/data/dataset.hpp"
-#include "lanechange/data/progress.hpp"
 #include "lanechange/error.hpp"
+#include "lanechange/run/progress.hpp"
 
 namespace lanechange::data {
 
-using detail::DirectoryState;
-using detail::ShardRange;
 using nlohmann::json;
 
 namespace {
@@ -43,20 +41,20 @@ void validate_options(const GenerateOptions& o) {
 // Rank 0 alone touches the directory; the others learn the outcome, so that
 // every rank stops (or goes on) together. Codes: the DirectoryState, or -2
 // for bad input and -1 for any other error.
-DirectoryState agree_on_directory(const std::string& dir, const json& parameters, Team& team) {
-  return static_cast<DirectoryState>(decide_on_rank_zero(team, "--out", [&] {
-    const DirectoryState state = detail::prepare_directory(dir, parameters);
-    if (state == DirectoryState::Resumable) detail::remove_stale_temporaries(dir);
+DirectoryState agree_on_directory(const std::string& dir, const json& parameters, run::Team& team) {
+  return static_cast<DirectoryState>(run::decide_on_rank_zero(team, "--out", [&] {
+    const DirectoryState state = prepare_directory(dir, parameters);
+    if (state == DirectoryState::Resumable) remove_stale_temporaries(dir);
     return static_cast<int>(state);
   }));
 }
 
-std::vector<ShardRange> unfinished_shards(const GenerateOptions& o, const Team& team,
+std::vector<ShardRange> unfinished_shards(const GenerateOptions& o, const run::Team& team,
                                           GenerateReport& report) {
   std::vector<ShardRange> todo;
   for (long long s = team.rank(); s < report.shards_total; s += team.size()) {
-    const ShardRange range = detail::shard_range(s, o.count, o.shard_size);
-    if (detail::shard_finished(range, o.out_dir)) {
+    const ShardRange range = shard_range(s, o.count, o.shard_size);
+    if (shard_finished(range, o.out_dir)) {
       ++report.shards_skipped;
     } else {
       todo.push_back(range);
@@ -67,8 +65,8 @@ std::vector<ShardRange> unfinished_shards(const GenerateOptions& o, const Team& 
 
 // Workers pull shard indices from one counter, so a slow shard does not hold
 // up the others. The first error stops the pool and is rethrown.
-void run_workers(const detail::ShardMaker& maker, const std::vector<ShardRange>& todo,
-                 const std::string& dir, int jobs, Progress& progress) {
+void run_workers(const ShardMaker& maker, const std::vector<ShardRange>& todo,
+                 const std::string& dir, int jobs, run::Progress& progress) {
   std::atomic<std::size_t> next{0};
   std::atomic<bool> stop{false};
   std::exception_ptr first_error;
@@ -78,7 +76,7 @@ void run_workers(const detail::ShardMaker& maker, const std::vector<ShardRange>&
       const std::size_t i = next++;
       if (i >= todo.size()) return;
       try {
-        detail::make_shard(maker, todo[i], dir, [&] { progress.add(1); });
+        make_shard(maker, todo[i], dir, [&] { progress.add(1); });
       } catch (...) {
         const std::lock_guard lock(error_mutex);
         if (!first_error) first_error = std::current_exception();
@@ -103,7 +101,7 @@ std::string utc_now() {
   return text;
 }
 
-json run_block(const Team& team, int jobs, double wall_s) {
+json run_block(const run::Team& team, int jobs, double wall_s) {
   char host[256] = {};
   ::gethostname(host, sizeof host - 1);
   return {{"host", host},
@@ -121,27 +119,6 @@ long long scenarios_in(const std::vector<ShardRange>& shards) {
 
 }  // namespace
 
-int decide_on_rank_zero(Team& team, const std::string& field, const std::function<int()>& decide) {
-  // Codes below zero: -2 for bad input, -1 for any other error.
-  int code = -1;
-  std::exception_ptr error;
-  if (team.rank() == 0) {
-    try {
-      code = decide();
-    } catch (const InputError&) {
-      error = std::current_exception();
-      code = -2;
-    } catch (...) {
-      error = std::current_exception();
-    }
-  }
-  code = team.broadcast(code);
-  if (error) std::rethrow_exception(error);
-  if (code == -2) throw InputError(field, "refused by rank 0 (see its message)");
-  if (code < 0) throw std::runtime_error("rank 0 failed (see its message)");
-  return code;
-}
-
 json dataset_parameters(const GenerateOptions& o) {
   const json config = o.config;
   return {{"version", LANECHANGE_VERSION},
@@ -154,12 +131,13 @@ json dataset_parameters(const GenerateOptions& o) {
           {"config", config}};
 }
 
-GenerateReport generate(const GenerateOptions& options, const RunOptions& run, Team& team) {
+GenerateReport generate(const GenerateOptions& options, const RunOptions& run) {
+  run::Team& team = run::team_or_alone(run.team);
   const auto start = Clock::now();
   validate_options(options);
   const json parameters = dataset_parameters(options);
   GenerateReport report;
-  report.shards_total = detail::shard_count(options.count, options.shard_size);
+  report.shards_total = shard_count(options.count, options.shard_size);
   if (agree_on_directory(options.out_dir, parameters, team) == DirectoryState::Complete) {
     report.already_complete = true;
     return report;
@@ -172,9 +150,8 @@ GenerateReport generate(const GenerateOptions& options, const RunOptions& run, T
                                                 options.solver, options.config.expert.big_m);
   const ScenarioSampler sampler(options.config, options.seed);
   const expert::ExpertPlanner planner(options.config, solver);
-  const detail::ShardMaker maker{sampler, planner, options.behavior, options.seed,
-                                 options.time_limit_s};
-  Progress progress(run.progress, run.progress_on_terminal, scenarios_in(todo));
+  const ShardMaker maker{sampler, planner, options.behavior, options.seed, options.time_limit_s};
+  run::Progress progress(run.progress, run.progress_on_terminal, scenarios_in(todo));
   run_workers(maker, todo, options.out_dir, jobs, progress);
   progress.finish();
   report.shards_written = static_cast<long long>(todo.size());
@@ -183,7 +160,7 @@ GenerateReport generate(const GenerateOptions& options, const RunOptions& run, T
   team.barrier();
   const double wall_s = std::chrono::duration<double>(Clock::now() - start).count();
   if (team.rank() == 0) {
-    detail::write_final_manifest(options.out_dir, parameters, run_block(team, jobs, wall_s));
+    write_final_manifest(options.out_dir, parameters, run_block(team, jobs, wall_s));
   }
   report.wall_s = wall_s;
   return report;

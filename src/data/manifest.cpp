@@ -1,7 +1,5 @@
 #include "data/manifest.hpp"
 
-#include <zlib.h>
-
 #include <filesystem>
 #include <fstream>
 #include <vector>
@@ -12,8 +10,9 @@
 #include "data/tables.hpp"
 #include "lanechange/data/dataset.hpp"
 #include "lanechange/error.hpp"
+#include "run/checksum.hpp"
 
-namespace lanechange::data::detail {
+namespace lanechange::data {
 
 namespace fs = std::filesystem;
 using nlohmann::json;
@@ -87,11 +86,11 @@ json shard_entry(const std::string& dir, const ShardRange& range, ScenarioTally&
           {"scenarios",
            {{"file", scenarios_file(range.shard)},
             {"rows", range.count},
-            {"crc32", file_crc32(scenarios)}}},
+            {"crc32", run::file_crc32(scenarios)}}},
           {"samples",
            {{"file", samples_file(range.shard)},
             {"rows", sample_rows},
-            {"crc32", file_crc32(samples)}}},
+            {"crc32", run::file_crc32(samples)}}},
           {"timing", {{"file", timing_file(range.shard)}, {"rows", timing_rows}}}};
 }
 
@@ -170,19 +169,4 @@ void write_manifest_of_shards(const std::string& dir, const json& parameters, co
   write_manifest(dir, manifest);
 }
 
-std::string file_crc32(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError("", "cannot read " + path);
-  uLong crc = crc32(0L, Z_NULL, 0);
-  std::vector<char> buffer(1 << 16);
-  while (in) {
-    in.read(buffer.data(), static_cast<std::streamsize>(buffer.size()));
-    const auto got = static_cast<uInt>(in.gcount());
-    if (got > 0) crc = crc32(crc, reinterpret_cast<const Bytef*>(buffer.data()), got);
-  }
-  char text[16];
-  std::snprintf(text, sizeof text, "%08lx", static_cast<unsigned long>(crc));
-  return text;
-}
-
-}  // namespace lanechange::data::detail
+}  // namespace lanechange::data

@@ -6,7 +6,7 @@
 #include <string>
 #include <vector>
 
-namespace lanechange::data::detail {
+namespace lanechange::data {
 
 enum class DirectoryState { Fresh, Resumable, Complete };
 
@@ -34,7 +34,4 @@ void write_manifest_of_shards(const std::string& dir, const nlohmann::json& para
 /// The manifest of dir; InputError when missing or not one of ours.
 [[nodiscard]] nlohmann::json read_manifest(const std::string& dir);
 
-/// CRC-32 (zlib's, as Python's zlib.crc32) of a file, as 8 hex digits.
-[[nodiscard]] std::string file_crc32(const std::string& path);
-
-}  // namespace lanechange::data::detail
+}  // namespace lanechange::data

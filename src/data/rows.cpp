@@ -4,7 +4,9 @@
 #include <charconv>
 #include <cmath>
 
-namespace lanechange::data::detail {
+#include "run/csv.hpp"
+
+namespace lanechange::data {
 
 namespace {
 
@@ -137,18 +139,6 @@ ScenarioRows header_rows() {
   return {join(scenario_columns()), join(sample_columns()), join(timing_columns())};
 }
 
-std::string csv_field(const std::string& text) {
-  if (text.find_first_of(",\"\r\n") == std::string::npos) return text;
-  std::string quoted = "\"";
-  for (char c : text) {
-    // One record per line keeps the files countable with wc -l and readable
-    // by line-based tools; a line break in a message carries no meaning.
-    if (c == '\n' || c == '\r') c = ' ';
-    quoted += c == '"' ? std::string("\"\"") : std::string(1, c);
-  }
-  return quoted + "\"";
-}
-
 ScenarioRows scenario_rows(std::uint64_t index, std::uint64_t sub_seed, const Scenario& scenario,
                            const PlanOutcome& outcome) {
   const std::string scene = scene_text(scenario);
@@ -164,7 +154,7 @@ ScenarioRows scenario_rows(std::uint64_t index, std::uint64_t sub_seed, const Sc
   put(out, outcome.objective);
   put(out, static_cast<std::uint64_t>(outcome.iterations));
   put(out, static_cast<std::uint64_t>(outcome.trajectory.nodes()));
-  put(out, csv_field(outcome.reason));
+  put(out, run::csv_field(outcome.reason));
   out += '\n';
   put_samples(rows.samples, index, scene, outcome);
   rows.timing += std::to_string(index);
@@ -173,4 +163,4 @@ ScenarioRows scenario_rows(std::uint64_t index, std::uint64_t sub_seed, const Sc
   return rows;
 }
 
-}  // namespace lanechange::data::detail
+}  // namespace lanechange::data

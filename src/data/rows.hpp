@@ -9,7 +9,7 @@
 #include "lanechange/scenario.hpp"
 #include "lanechange/trajectory.hpp"
 
-namespace lanechange::data::detail {
+namespace lanechange::data {
 
 /// What planning one scenario gave: a plan, a failure, or an exception.
 struct PlanOutcome {
@@ -46,7 +46,4 @@ struct ScenarioRows {
 [[nodiscard]] ScenarioRows scenario_rows(std::uint64_t index, std::uint64_t sub_seed,
                                          const Scenario& scenario, const PlanOutcome& outcome);
 
-/// RFC 4180 quoting when the field needs it; line breaks become spaces.
-[[nodiscard]] std::string csv_field(const std::string& text);
-
-}  // namespace lanechange::data::detail
+}  // namespace lanechange::data

@@ -24,7 +24,7 @@ std::string timing_file(long long shard) { return shard_name("timing", shard); }
 
 }  // namespace lanechange::data
 
-namespace lanechange::data::detail {
+namespace lanechange::data {
 
 long long shard_count(long long count, long long shard_size) {
   return (count + shard_size - 1) / shard_size;
@@ -101,4 +101,4 @@ bool shard_finished(const ShardRange& range, const std::string& dir) {
          count_rows((d / samples_file(range.shard)).string()) >= 0;
 }
 
-}  // namespace lanechange::data::detail
+}  // namespace lanechange::data

@@ -13,7 +13,7 @@
 #include "lanechange/expert/planner.hpp"
 #include "lanechange/sampler.hpp"
 
-namespace lanechange::data::detail {
+namespace lanechange::data {
 
 struct ShardRange {
   long long shard = 0;
@@ -74,4 +74,4 @@ void make_shard(const ShardMaker& maker, const ShardRange& range, const std::str
 /// Data lines (all but the header) of a file; -1 if it cannot be read.
 [[nodiscard]] long long count_rows(const std::string& path);
 
-}  // namespace lanechange::data::detail
+}  // namespace lanechange::data

@@ -8,6 +8,8 @@
 #include "data/tables.hpp"
 #include "lanechange/data/dataset.hpp"
 #include "lanechange/error.hpp"
+#include "lanechange/run/quantile.hpp"
+#include "run/checksum.hpp"
 
 namespace lanechange::data {
 
@@ -21,25 +23,22 @@ void check_file(const std::string& dir, const json& entry, bool has_checksum) {
   const std::string name = entry.at("file").get<std::string>();
   const std::string path = (fs::path(dir) / name).string();
   if (!fs::exists(path)) throw InputError("", path + " is missing");
-  if (detail::count_rows(path) != entry.at("rows").get<long long>()) {
+  if (count_rows(path) != entry.at("rows").get<long long>()) {
     throw InputError("", path + " does not have the rows the manifest lists");
   }
-  if (has_checksum && detail::file_crc32(path) != entry.at("crc32").get<std::string>()) {
+  if (has_checksum && run::file_crc32(path) != entry.at("crc32").get<std::string>()) {
     throw InputError("", path + " does not match the manifest's checksum");
   }
 }
 
-void read_shard(const std::string& dir, const json& shard, detail::ScenarioTally& tally,
-                detail::LineTally& line, std::vector<double>& solve_ms) {
+void read_shard(const std::string& dir, const json& shard, ScenarioTally& tally, LineTally& line,
+                std::vector<double>& solve_ms) {
   check_file(dir, shard.at("scenarios"), true);
   check_file(dir, shard.at("samples"), true);
   check_file(dir, shard.at("timing"), false);
-  detail::tally_scenarios((fs::path(dir) / shard["scenarios"]["file"].get<std::string>()).string(),
-                          tally);
-  detail::tally_line_riding((fs::path(dir) / shard["samples"]["file"].get<std::string>()).string(),
-                            line);
-  detail::read_solve_ms((fs::path(dir) / shard["timing"]["file"].get<std::string>()).string(),
-                        solve_ms);
+  tally_scenarios((fs::path(dir) / shard["scenarios"]["file"].get<std::string>()).string(), tally);
+  tally_line_riding((fs::path(dir) / shard["samples"]["file"].get<std::string>()).string(), line);
+  read_solve_ms((fs::path(dir) / shard["timing"]["file"].get<std::string>()).string(), solve_ms);
 }
 
 void print_counts(const char* title, const std::map<std::string, long long>& counts,
@@ -56,20 +55,17 @@ void print_counts(const char* title, const std::map<std::string, long long>& cou
 }  // namespace
 
 double DatasetSummary::solve_ms_percentile(double q) const {
-  if (solve_ms.empty()) return NAN;
-  const double rank = std::ceil(std::clamp(q, 0.0, 1.0) * static_cast<double>(solve_ms.size()));
-  const auto i = static_cast<std::size_t>(std::max(1.0, rank)) - 1;
-  return solve_ms[i];
+  return run::nearest_rank_sorted(solve_ms, q);
 }
 
 DatasetSummary summarize_dataset(const std::string& dir) {
-  const json manifest = detail::read_manifest(dir);
+  const json manifest = read_manifest(dir);
   if (manifest.value("status", std::string()) != "complete") {
     throw InputError("", dir + " is incomplete; run the same generate command again to finish it");
   }
   DatasetSummary summary;
-  detail::ScenarioTally tally;
-  detail::LineTally line;
+  ScenarioTally tally;
+  LineTally line;
   try {
     summary.parameters = manifest.at("parameters");
     line.line = summary.parameters.at("config").at("lane_width").get<double>() / 2.0;

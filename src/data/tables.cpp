@@ -19,7 +19,7 @@
 
 #include "lanechange/error.hpp"
 
-namespace lanechange::data::detail {
+namespace lanechange::data {
 
 namespace {
 
@@ -120,4 +120,4 @@ void tally_line_riding(const std::string& path, LineTally& tally) {
   });
 }
 
-}  // namespace lanechange::data::detail
+}  // namespace lanechange::data

@@ -4,7 +4,7 @@
 #include <string>
 #include <vector>
 
-namespace lanechange::data::detail {
+namespace lanechange::data {
 
 struct ScenarioTally {
   long long rows = 0;
@@ -37,4 +37,4 @@ void tally_scenarios(const std::string& path, ScenarioTally& tally);
 /// Appends a timing file's solve times to out. InputError on a malformed file.
 void read_solve_ms(const std::string& path, std::vector<double>& out);
 
-}  // namespace lanechange::data::detail
+}  // namespace lanechange::data

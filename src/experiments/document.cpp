@@ -34,16 +34,6 @@ std::string inline_html(const std::string& text) {
   return out;
 }
 
-std::string markdown_row(const std::vector<std::string>& cells) {
-  std::string line = "|";
-  for (const auto& cell : cells) {
-    line += ' ';
-    line += cell;
-    line += " |";
-  }
-  return line + "\n";
-}
-
 std::string read_bytes(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   std::ostringstream bytes;
@@ -105,9 +95,7 @@ std::string Document::markdown() const {
         out += "\n";
         break;
       case Kind::Table: {
-        out += markdown_row(b.table.header);
-        out += markdown_row(std::vector<std::string>(b.table.header.size(), "---"));
-        for (const auto& row : b.table.rows) out += markdown_row(row);
+        out += run::markdown(b.table);
         out += "\n";
         break;
       }

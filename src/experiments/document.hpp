@@ -5,12 +5,11 @@
 #include <string>
 #include <vector>
 
+#include "lanechange/run/markdown.hpp"
+
 namespace lanechange::experiments {
 
-struct Table {
-  std::vector<std::string> header;
-  std::vector<std::vector<std::string>> rows;
-};
+using run::Table;
 
 class Document {
  public:

@@ -38,14 +38,14 @@ constexpr std::uint64_t kDataSeed = 101;
 constexpr std::uint64_t kEvalSeed = 2026;
 constexpr std::uint64_t kTrainSeed = 1;
 constexpr double kTestShare = 0.2;  // the paper's 1000 of 5000
-// DAgger's training scenes (docs/strategy.md's seed), and every 2nd step labelled.
+// DAgger's training scenes (docs/dagger.md's seed), and every 2nd step labelled.
 constexpr std::uint64_t kDaggerSeed = 7001;
 constexpr int kDaggerStride = 2;
-// DAgger's policy is an ensemble (docs/strategy.md, "An ensemble per round"):
+// DAgger's policy is an ensemble (docs/dagger.md):
 // one network's seed moved the take-overs as much as a round's labels.
 constexpr int kDaggerNetworks = 3;
-// Round r's policy is the mean of the ensembles of rounds 0..r (docs/strategy.md,
-// "Ensembles averaged over the rounds"): the deterministic form of the mixture
+// Round r's policy is the mean of the ensembles of rounds 0..r (docs/dagger.md):
+// the deterministic form of the mixture
 // of the rounds' policies that DAgger's guarantee is for, and with ensembles
 // the one form whose take-overs fell with every round.
 constexpr bool kDaggerAverage = true;
@@ -76,7 +76,7 @@ void validate(const ExperimentOptions& o, const std::vector<std::string>& planne
       std::string problem = "unknown planner \"";
       problem += p;
       problem += "\"";
-      throw InputError("--planners", problem);
+      throw InputError("--planner", problem);
     }
   }
   if (fs::exists(o.out_dir) && !fs::is_directory(o.out_dir)) {
@@ -86,7 +86,7 @@ void validate(const ExperimentOptions& o, const std::vector<std::string>& planne
 
 struct Context {
   const ExperimentOptions& options;
-  data::Team& team;
+  run::Team& team;
   ExperimentSizes sizes;
   std::vector<std::string> planners;
   fs::path dir;
@@ -116,11 +116,12 @@ void generate_sets(const Context& c, const std::string& parent, std::uint64_t se
     g.config = c.options.config;
     data::RunOptions run;
     run.jobs = c.options.jobs;
+    run.team = &c.team;
     if (c.team.rank() == 0) {
       run.progress = c.options.progress;
       run.progress_on_terminal = c.options.progress_on_terminal;
     }
-    (void)data::generate(g, run, c.team);
+    (void)data::generate(g, run);
   }
 }
 
@@ -304,11 +305,10 @@ ExperimentReport run_experiments(const ExperimentOptions& o) {
   const auto planners = o.planners.empty() ? default_planners() : o.planners;
   validate(o, planners);
   const auto start = std::chrono::steady_clock::now();
-  data::Team alone;
-  data::Team& team = o.team != nullptr ? *o.team : alone;
+  run::Team& team = run::team_or_alone(o.team);
   Context c{o, team, sizes_of(o.scale), planners, fs::path(o.out_dir), {}};
   if (o.eval_count > 0) c.sizes.eval_per_behavior = o.eval_count;
-  (void)data::decide_on_rank_zero(team, "--out", [&] {
+  (void)run::decide_on_rank_zero(team, "--out", [&] {
     fs::create_directories(c.dir);
     return 0;
   });
@@ -365,7 +365,7 @@ ExperimentReport run_experiments(const ExperimentOptions& o) {
                                           {"eval_count", 3 * c.sizes.eval_per_behavior},
                                           {"networks", kDaggerNetworks},
                                           {"average", kDaggerAverage},
-                                          // Since stop 35: scored with the budget lifted.
+                                          // Scored with the step budget lifted.
                                           {"scoring", "untimed"}},
                                          {"dagger"}, StageRunner::Ranks::First, [&] {
                                            (void)dagger::run(dagger_options(c), c.options.progress);

@@ -44,7 +44,7 @@ std::string command_of(const ExperimentOptions& o, const ExperimentSizes& sizes)
   command += to_string(o.scale);
   if (o.eval_count > 0) command += " --eval-count " + std::to_string(sizes.eval_per_behavior);
   if (!o.planners.empty()) {
-    command += " --planners ";
+    command += " --planner ";
     for (std::size_t i = 0; i < o.planners.size(); ++i) {
       command += (i > 0 ? "," : "") + o.planners[i];
     }
@@ -121,7 +121,7 @@ void dagger_section(Document& d, const ReportInputs& in) {
   const dagger::DaggerOptions& o = in.dagger_options;
   d.heading(2, "DAgger for the action network (beyond the paper)");
   d.paragraph(
-      "The paper names DAgger (Ross et al. 2011) as future work (docs/strategy.md). Each round "
+      "The paper names DAgger (Ross et al. 2011) as future work (docs/dagger.md). Each round "
       "rolls the last round's policy out " +
       std::string(o.rollout == dagger::Rollout::Gated
                       ? "under mlp-miqp's check (labels up to the take-over)"
@@ -149,9 +149,9 @@ void dagger_section(Document& d, const ReportInputs& in) {
       "timed). \"Network drives\" counts the held-out rollouts the "
       "classifier lets the network drive; of those, the check takes some over at the network's "
       "first step (the scene's own start) and some later. The same run alone: "
-      "`lanechange train --data DATA... --networks " +
-      std::to_string(o.train.network.networks) + " --dagger R" +
-      (o.average ? " --dagger-average" : "") + "` (docs/strategy.md).");
+      "`lanechange dagger --data DATA... --networks " +
+      std::to_string(o.train.network.networks) + " --rounds R" + (o.average ? " --average" : "") +
+      "` (docs/dagger.md).");
   d.table(dagger_table(*in.dagger));
   d.bullets(dagger_verdicts(*in.dagger));
   d.figure("figures/dagger.png", "DAgger: mlp-miqp's success and take-overs per round.");

@@ -22,7 +22,7 @@ std::string fingerprint(const std::string& text) {
   return hex;
 }
 
-StageRunner::StageRunner(std::string out_dir, std::ostream* progress, data::Team& team)
+StageRunner::StageRunner(std::string out_dir, std::ostream* progress, run::Team& team)
     : out_dir_(std::move(out_dir)), progress_(team.rank() == 0 ? progress : nullptr), team_(team) {}
 
 bool StageRunner::reuse_or_prepare(const std::string& name, const nlohmann::json& inputs,
@@ -65,7 +65,7 @@ std::string StageRunner::run(const std::string& name, const nlohmann::json& inpu
   std::string print = fingerprint(inputs.dump());
   const auto index = records_.size() + 1;
   const fs::path stamp = fs::path(out_dir_) / "stages" / (name + ".json");
-  const bool reuse = data::decide_on_rank_zero(team_, "--out", [&] {
+  const bool reuse = run::decide_on_rank_zero(team_, "--out", [&] {
                        return reuse_or_prepare(name, inputs, print, outputs) ? 1 : 0;
                      }) == 1;
   if (reuse) {
@@ -83,7 +83,7 @@ std::string StageRunner::run(const std::string& name, const nlohmann::json& inpu
     body();
   } else {
     // The other ranks wait in the broadcast, and learn of a failure there.
-    (void)data::decide_on_rank_zero(team_, name, [&] {
+    (void)run::decide_on_rank_zero(team_, name, [&] {
       body();
       return 0;
     });

@@ -17,7 +17,7 @@ namespace lanechange::experiments {
 class StageRunner {
  public:
   /// Rank 0 of `team` keeps the stamps; every rank learns its decisions.
-  StageRunner(std::string out_dir, std::ostream* progress, data::Team& team);
+  StageRunner(std::string out_dir, std::ostream* progress, run::Team& team);
 
   /// Who runs a stage's body: every rank (it splits its work over them
   /// itself, as generate and evaluate do) or rank 0 alone.
@@ -41,7 +41,7 @@ class StageRunner {
 
   std::string out_dir_;
   std::ostream* progress_;
-  data::Team& team_;
+  run::Team& team_;
   std::vector<StageRecord> records_;
 };
 

@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "lanechange/error.hpp"
+#include "lanechange/run/quantile.hpp"
 
 namespace lanechange::experiments {
 
@@ -242,11 +243,11 @@ Table comparison_table(const std::vector<sim::RolloutRow>& rows,
              percent(count(mine, [](const auto* r) { return r->at_fault; }), n) + ")",
          percent(count(mine, [](const auto* r) { return r->outcome == "aborted"; }), n),
          fixed(mean(column(mine, &sim::RolloutRow::takeovers)), 2),
-         significant(sim::nearest_rank(column(mine, &sim::RolloutRow::median_step_ms), 0.5)),
-         significant(sim::nearest_rank(column(mine, &sim::RolloutRow::p99_step_ms), 0.99)),
-         significant(sim::nearest_rank(column(mine, &sim::RolloutRow::max_step_ms), 1.0)),
+         significant(run::nearest_rank(column(mine, &sim::RolloutRow::median_step_ms), 0.5)),
+         significant(run::nearest_rank(column(mine, &sim::RolloutRow::p99_step_ms), 0.99)),
+         significant(run::nearest_rank(column(mine, &sim::RolloutRow::max_step_ms), 1.0)),
          fixed(mean(column(mine, &sim::RolloutRow::rms_jerk)), 2),
-         fixed(sim::nearest_rank(column(mine, &sim::RolloutRow::max_abs_accel), 0.95), 2),
+         fixed(run::nearest_rank(column(mine, &sim::RolloutRow::max_abs_accel), 0.95), 2),
          paper == kPaperComparison.end() ? "–" : paper->second});
   }
   return t;

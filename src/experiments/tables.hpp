@@ -46,7 +46,7 @@ struct GeneralizationResult {
 
 /// DAgger's rounds (0: before DAgger) and the expert for reference.
 [[nodiscard]] Table dagger_table(const dagger::DaggerReport& report);
-/// Issue 14's two DAgger targets, judged on the rows: take-overs fall with
+/// The two DAgger targets, judged on the rows: take-overs fall with
 /// every round, and mlp-miqp ends within 2 points of miqp's success.
 [[nodiscard]] std::vector<std::string> dagger_verdicts(const dagger::DaggerReport& report);
 

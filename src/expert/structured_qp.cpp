@@ -202,7 +202,7 @@ struct InteriorPointMethod {
 
   // One flat loop over the rows as initialize() packed them
   // (QpWorkspace::PackedRow): a loop per stage over the problem's 72-byte
-  // rows took about 10% more per plan (bench_expert, stop 30).
+  // rows takes about 10% more per plan (bench_expert).
   template <class F>
   void for_each_row(F&& f) {
     for (int i = 0; i < total_rows; ++i) f(ws.packed_[i].stage, ws.packed_[i], i);

@@ -11,6 +11,7 @@
 #include "data/manifest.hpp"
 #include "lanechange/data/dataset.hpp"
 #include "lanechange/error.hpp"
+#include "run/checksum.hpp"
 
 namespace lanechange::learn {
 
@@ -211,7 +212,7 @@ LearningData load_learning_data(const std::vector<std::string>& dirs) {
   Loader loader{data, {}, {}, {}, {}, {}};
   for (const std::string& dir : dirs) {
     const data::DatasetSummary summary = data::summarize_dataset(dir);  // checks checksums
-    const json manifest = data::detail::read_manifest(dir);
+    const json manifest = data::read_manifest(dir);
     try {
       adopt_or_compare(data, manifest, dir);
       loader.features.width = data.classifier_features.size();
@@ -222,9 +223,9 @@ LearningData load_learning_data(const std::vector<std::string>& dirs) {
     } catch (const json::exception& e) {
       throw InputError("", dir + "/manifest.json is malformed (" + e.what() + ")");
     }
-    data.datasets.push_back(
-        {dir, data::detail::file_crc32((fs::path(dir) / "manifest.json").string()),
-         summary.scenarios, manifest["parameters"].value("seed", std::uint64_t{0})});
+    data.datasets.push_back({dir, run::file_crc32((fs::path(dir) / "manifest.json").string()),
+                             summary.scenarios,
+                             manifest["parameters"].value("seed", std::uint64_t{0})});
   }
   data.scenarios.features = loader.features.matrix();
   data.samples.inputs = loader.inputs.matrix();

@@ -5,6 +5,7 @@
 #include "common/json_fields.hpp"
 #include "data/manifest.hpp"
 #include "lanechange/error.hpp"
+#include "run/checksum.hpp"
 
 namespace lanechange::learn {
 
@@ -19,7 +20,7 @@ void verify_files(const std::string& dir, const json& files) {
   for (const auto& [name, crc] : files.items()) {
     const std::string path = (fs::path(dir) / name).string();
     if (!fs::exists(path)) throw InputError("", path + " is missing from the model");
-    if (data::detail::file_crc32(path) != crc.get<std::string>()) {
+    if (run::file_crc32(path) != crc.get<std::string>()) {
       throw InputError("", path + " does not match the model's checksum (damaged or truncated)");
     }
   }

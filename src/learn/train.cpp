@@ -16,7 +16,9 @@
 #include "lanechange/learn/evaluation.hpp"
 #include "lanechange/learn/learn_data.hpp"
 #include "lanechange/learn/model.hpp"
+#include "lanechange/run/quantile.hpp"
 #include "learn/outputs.hpp"
+#include "run/checksum.hpp"
 
 namespace lanechange::learn {
 
@@ -202,11 +204,7 @@ json policy_errors(const Policy& policy, const SampleTable& s, const std::vector
     std::sort(e.begin(), e.end());
     const std::string& name = names[static_cast<std::size_t>(k)];
     rmse[name] = e.empty() ? 0.0 : std::sqrt(sum / double(e.size()));
-    // Nearest rank, as dataset-info's percentiles.
-    p95[name] =
-        e.empty()
-            ? 0.0
-            : e[static_cast<std::size_t>(std::max(1.0, std::ceil(0.95 * double(e.size())))) - 1];
+    p95[name] = e.empty() ? 0.0 : run::nearest_rank_sorted(e, 0.95);
   }
   return {{"test_rmse", rmse}, {"test_p95_abs_error", p95}};
 }
@@ -442,7 +440,7 @@ void write_model_files(Context& c) {
     // A retrained model starts as a copy of its base, model.json included.
     if (!entry.is_regular_file() || entry.path().filename() == kModelFile) continue;
     files[fs::relative(entry.path(), c.dir).generic_string()] =
-        data::detail::file_crc32(entry.path().string());
+        run::file_crc32(entry.path().string());
   }
   c.model["files"] = files;
   lanechange::detail::write_file_atomically((c.dir / kModelFile).string(), c.model.dump(2));

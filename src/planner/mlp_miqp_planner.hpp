@@ -58,7 +58,7 @@ class MlpMiqpPlanner final : public ClosedLoopPlanner {
 /// its take-over, whose "network" is the closed-loop expert itself, planning
 /// from every state it is asked about (the keeper's control where it finds
 /// no plan). A perfect imitation of the expert, so its take-overs are the
-/// ones no training of the network removes (docs/strategy.md, DAgger). Slow:
+/// ones no training of the network removes (docs/dagger.md). Slow:
 /// an exact plan for every step of every look-ahead.
 [[nodiscard]] std::shared_ptr<const MlpMiqpPlanner> make_oracle_mlp_miqp(
     const Config& config, const std::shared_ptr<const learn::Model>& model);

@@ -13,11 +13,12 @@
 
 #include "common/json_fields.hpp"
 #include "data/rows.hpp"
-#include "lanechange/data/progress.hpp"
 #include "lanechange/error.hpp"
 #include "lanechange/planner/planner.hpp"
+#include "lanechange/run/progress.hpp"
 #include "lanechange/sampler.hpp"
 #include "lanechange/sim/simulator.hpp"
+#include "run/csv.hpp"
 #include "sim/evaluation_files.hpp"
 
 namespace lanechange::sim {
@@ -111,7 +112,7 @@ std::string rollout_row(long long index, const Scenario& s, const std::string& p
     row += ',';
     row += number(v);
   }
-  return row + "," + m.target_lane_slot + "," + data::detail::csv_field(r.reason) + "\n";
+  return row + "," + m.target_lane_slot + "," + run::csv_field(r.reason) + "\n";
 }
 
 }  // namespace
@@ -154,9 +155,8 @@ EvaluateReport evaluate(const EvaluateOptions& o, const EvaluateRun& run) {
   const json parameters = parameters_of(o);
   EvaluateReport report;
   report.shards_total = (o.count + o.shard_size - 1) / o.shard_size;
-  data::Team alone;
-  data::Team& team = run.team != nullptr ? *run.team : alone;
-  if (data::decide_on_rank_zero(team, "--out", [&] { return prepare(o, parameters) ? 1 : 0; }) ==
+  run::Team& team = run::team_or_alone(run.team);
+  if (run::decide_on_rank_zero(team, "--out", [&] { return prepare(o, parameters) ? 1 : 0; }) ==
       1) {
     report.shards_skipped = report.shards_total;
     return report;
@@ -173,8 +173,8 @@ EvaluateReport evaluate(const EvaluateOptions& o, const EvaluateRun& run) {
   const auto per_shard = static_cast<long long>(planners.size());
   long long total = 0;
   for (long long s : todo) total += std::min(o.shard_size, o.count - s * o.shard_size) * per_shard;
-  data::Progress progress(run.progress, run.progress_on_terminal, total, -1.0, "evaluate",
-                          "rollouts");
+  run::Progress progress(run.progress, run.progress_on_terminal, total, -1.0, "evaluate",
+                         "rollouts");
   std::atomic<std::size_t> next{0};
   std::atomic<long long> done{0};
   std::mutex error_mutex;

@@ -5,6 +5,7 @@
 
 #include "lanechange/checks.hpp"
 #include "lanechange/error.hpp"
+#include "lanechange/run/quantile.hpp"
 #include "lanechange/sim/evaluate.hpp"
 #include "lanechange/sim/simulator.hpp"
 #include "lanechange/traffic.hpp"
@@ -128,8 +129,8 @@ RolloutMetrics measure(const Rollout& rollout, const Scenario& scene, const Conf
   }
   for (const StepRecord& s : rollout.steps) m.clipped += s.clipped ? 1 : 0;
   // 0, not NaN, for a rollout whose planner never acted.
-  m.median_step_ms = ms.empty() ? 0.0 : nearest_rank(ms, 0.5);
-  m.p99_step_ms = ms.empty() ? 0.0 : nearest_rank(ms, 0.99);
+  m.median_step_ms = ms.empty() ? 0.0 : run::nearest_rank(ms, 0.5);
+  m.p99_step_ms = ms.empty() ? 0.0 : run::nearest_rank(ms, 0.99);
   return m;
 }
 

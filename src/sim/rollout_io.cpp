@@ -3,14 +3,13 @@
 
 #include "common/json_fields.hpp"
 #include "lanechange/sim/simulator.hpp"
+#include "run/json_numbers.hpp"
 
 namespace lanechange::sim {
 
 namespace {
 
 using nlohmann::json;
-
-json number_or_null(double v) { return std::isfinite(v) ? json(v) : json(); }
 
 // The steps where something other than the planner's own method acted.
 json events(const Rollout& r) {
@@ -43,17 +42,18 @@ json rollout_to_json(const Rollout& r) {
   for (const StepRecord& s : r.steps) per_step.push_back(s.compute_ms);
   out["compute_ms"]["steps"] = per_step;
   out["events"] = events(r);
-  out["manoeuvre_over_at"] = number_or_null(r.manoeuvre_over_at >= 0 ? r.manoeuvre_over_at : NAN);
+  out["manoeuvre_over_at"] =
+      run::number_or_null(r.manoeuvre_over_at >= 0 ? r.manoeuvre_over_at : NAN);
   out["metrics"] = {
       {"time_to_target_lane",
-       number_or_null(m.time_to_target_lane >= 0 ? m.time_to_target_lane : NAN)},
-      {"min_gap", number_or_null(m.min_gap)},
-      {"min_ttc", number_or_null(m.min_ttc)},
+       run::number_or_null(m.time_to_target_lane >= 0 ? m.time_to_target_lane : NAN)},
+      {"min_gap", run::number_or_null(m.min_gap)},
+      {"min_ttc", run::number_or_null(m.min_ttc)},
       {"max_abs_accel", m.max_abs_accel},
       {"rms_jerk", m.rms_jerk},
       {"max_abs_omega", m.max_abs_omega},
       {"takeovers", m.takeovers},
-      {"first_takeover_t", number_or_null(m.first_takeover_t >= 0 ? m.first_takeover_t : NAN)},
+      {"first_takeover_t", run::number_or_null(m.first_takeover_t >= 0 ? m.first_takeover_t : NAN)},
       {"fallbacks", m.fallbacks},
       {"clipped", m.clipped},
       {"overruns", m.overruns},

@@ -8,6 +8,7 @@
 
 #include "common/json_fields.hpp"
 #include "lanechange/error.hpp"
+#include "lanechange/run/quantile.hpp"
 #include "lanechange/sim/evaluate.hpp"
 #include "sim/evaluation_files.hpp"
 
@@ -96,13 +97,13 @@ std::string summary_row(const std::string& planner, const std::string& behavior,
                                      rates.takeovers,
                                      rates.fallbacks,
                                      rates.overruns,
-                                     nearest_rank(values(&Row::median_step_ms), 0.5),
-                                     nearest_rank(values(&Row::max_step_ms), 0.99),
-                                     nearest_rank(values(&Row::max_step_ms), 1.0),
-                                     nearest_rank(values(&Row::time_to_target_lane), 0.5),
-                                     nearest_rank(values(&Row::min_ttc), 0.05),
+                                     run::nearest_rank(values(&Row::median_step_ms), 0.5),
+                                     run::nearest_rank(values(&Row::max_step_ms), 0.99),
+                                     run::nearest_rank(values(&Row::max_step_ms), 1.0),
+                                     run::nearest_rank(values(&Row::time_to_target_lane), 0.5),
+                                     run::nearest_rank(values(&Row::min_ttc), 0.05),
                                      mean(&Row::rms_jerk),
-                                     nearest_rank(values(&Row::max_abs_accel), 0.95)};
+                                     run::nearest_rank(values(&Row::max_abs_accel), 0.95)};
   std::string line = planner + "," + behavior;
   for (double c : cells) {
     line += ',';
@@ -134,15 +135,6 @@ RolloutRates rates_of(std::span<const RolloutRow* const> rows) {
     *share /= n;
   }
   return out;
-}
-
-double nearest_rank(std::vector<double> values, double q) {
-  std::erase_if(values, [](double v) { return !std::isfinite(v); });
-  if (values.empty()) return NAN;
-  const auto rank = static_cast<std::size_t>(std::ceil(q * static_cast<double>(values.size())));
-  const auto at = values.begin() + static_cast<std::ptrdiff_t>(std::max<std::size_t>(rank, 1) - 1);
-  std::nth_element(values.begin(), at, values.end());
-  return *at;
 }
 
 std::vector<RolloutRow> read_rollouts(const std::string& path) {

@@ -1,6 +1,5 @@
-// The sampling baselines in the loop: the acceptance of issue 12 (a lane
-// change into a wide-open gap, staying in lane without a gap) and the
-// consistency check of every rollout.
+// The sampling baselines in the loop: a lane change into a wide-open gap,
+// staying in lane without a gap, and the consistency check of every rollout.
 #include <gtest/gtest.h>
 
 #include "lanechange/baselines/baselines.hpp"

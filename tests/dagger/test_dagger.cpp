@@ -308,7 +308,7 @@ TEST(Dagger, APartialExpertShareMixesTheDriversByASeededCoin) {
 }
 
 // mlp-miqp never lets the network drive a scene its classifier refuses, so
-// by default neither does DAgger; every_scene restores the first version.
+// by default neither does DAgger; every_scene rolls out there too.
 TEST(Dagger, ScenesTheClassifierRefusesAreNotRolledOut) {
   const Config config = small_config();
   const planner::MlpMiqpPlanner refusing = constant_learner(config, {0.0, 0.0}, Label::Failure);
@@ -331,9 +331,9 @@ class DaggerCli : public ::testing::Test {
       ASSERT_EQ(made.exit_code, 0) << made.output;
     });
   }
-  [[nodiscard]] testing::CommandResult train(const std::string& extra) const {
+  [[nodiscard]] testing::CommandResult run_dagger(const std::string& extra) const {
     return testing::run_cli("--config " + config_ +
-                            " train --quick --no-plots --max-epochs 10 --jobs 2 --data " + data_ +
+                            " dagger --quick --no-plots --max-epochs 10 --jobs 2 --data " + data_ +
                             " --out " + dir_.file("model") + " " + extra);
   }
   testing::TempDir dir_;
@@ -421,12 +421,11 @@ void expect_fine_tune_starts_from_the_warm_network(const std::string& work) {
 
 TEST_F(DaggerCli, OneRoundAddsLabelsAsAValidDataSetAndTabulatesEachRound) {
   const std::string work = dir_.file("work");
-  const auto run = train("--dagger 1 --dagger-dir " + work +
-                         " --dagger-scenes 8 --dagger-stride 2 --dagger-eval-count 6");
+  const auto run = run_dagger("--rounds 1 --dir " + work + " --scenes 8 --stride 2 --eval-count 6");
   ASSERT_EQ(run.exit_code, 0) << run.output;
 
   const std::string aggregated = work + "/data";
-  EXPECT_EQ(testing::run_cli("dataset-info " + aggregated).exit_code, 0);
+  EXPECT_EQ(testing::run_cli("dataset-info --data " + aggregated).exit_code, 0);
   const data::DatasetSummary summary = data::summarize_dataset(aggregated);
   EXPECT_GT(summary.scenarios, 0);
   EXPECT_GT(summary.samples, 0);
@@ -484,8 +483,8 @@ TEST_F(DaggerCli, OneRoundAddsLabelsAsAValidDataSetAndTabulatesEachRound) {
 
   // The same command again finds every step done and tabulates the same.
   const std::string csv = testing::read_text(work + "/dagger.csv");
-  const auto again = train("--dagger 1 --dagger-dir " + work +
-                           " --dagger-scenes 8 --dagger-stride 2 --dagger-eval-count 6");
+  const auto again =
+      run_dagger("--rounds 1 --dir " + work + " --scenes 8 --stride 2 --eval-count 6");
   ASSERT_EQ(again.exit_code, 0) << again.output;
   EXPECT_EQ(again.output.find("expert queries"), std::string::npos) << again.output;
   EXPECT_EQ(testing::read_text(work + "/dagger.csv"), csv);
@@ -512,9 +511,9 @@ TEST_F(DaggerCli, OneRoundAddsLabelsAsAValidDataSetAndTabulatesEachRound) {
 TEST_F(DaggerCli, TheRetrainsLearnAtTheirOwnRate) {
   auto largest_move = [this](const std::string& rate) {
     const std::string work = dir_.file("work" + rate);
-    const auto run = train("--dagger 1 --dagger-fine-tune --dagger-dir " + work +
-                           " --dagger-scenes 8 --dagger-stride 2 --dagger-eval-count 2" +
-                           (rate.empty() ? "" : " --dagger-learning-rate " + rate));
+    const auto run = run_dagger("--rounds 1 --fine-tune --dir " + work +
+                                " --scenes 8 --stride 2 --eval-count 2" +
+                                (rate.empty() ? "" : " --learning-rate " + rate));
     EXPECT_EQ(run.exit_code, 0) << run.output;
     const learn::Policy before(policy_of(work + "/model-0")), after(policy_of(work + "/model-1"));
     const auto data = learn::load_learning_data({data_});
@@ -530,13 +529,13 @@ TEST_F(DaggerCli, TheRetrainsLearnAtTheirOwnRate) {
   EXPECT_GT(largest_move(""), 10.0 * vanishing + 1e-3);
 }
 
-// With --dagger-average, round r's policy averages the networks of rounds
+// With --average, round r's policy averages the networks of rounds
 // 0..r: each round adds its own network to the last round's members, and a
 // fine-tune goes on from that newest network.
 TEST_F(DaggerCli, AveragedRoundsAddTheirNetworkToTheLastRoundsMembers) {
   const std::string work = dir_.file("work");
-  const auto run = train("--dagger 2 --dagger-average --dagger-fine-tune --dagger-dir " + work +
-                         " --dagger-scenes 6 --dagger-stride 2 --dagger-eval-count 2");
+  const auto run = run_dagger("--rounds 2 --average --fine-tune --dir " + work +
+                              " --scenes 6 --stride 2 --eval-count 2");
   ASSERT_EQ(run.exit_code, 0) << run.output;
   const auto members_of = [&](int round) {
     return learn::policy_members_from_json(nlohmann::json::parse(
@@ -573,27 +572,27 @@ TEST_F(DaggerCli, AveragedRoundsAddTheirNetworkToTheLastRoundsMembers) {
 // set records each round's share and stays a data set.
 TEST_F(DaggerCli, MixedRoundsRecordTheirExpertShareInTheDataSet) {
   const std::string work = dir_.file("work");
-  const auto run = train("--dagger 2 --dagger-beta 0.5 --dagger-dir " + work +
-                         " --dagger-scenes 6 --dagger-stride 2 --dagger-eval-count 2");
+  const auto run =
+      run_dagger("--rounds 2 --beta 0.5 --dir " + work + " --scenes 6 --stride 2 --eval-count 2");
   ASSERT_EQ(run.exit_code, 0) << run.output;
   const auto manifest = nlohmann::json::parse(testing::read_text(work + "/data/manifest.json"));
   const auto& shards = manifest.at("parameters").at("dagger").at("shards");
   ASSERT_EQ(shards.size(), 2U);
   EXPECT_DOUBLE_EQ(shards[0].at("expert_share").get<double>(), 0.5);
   EXPECT_DOUBLE_EQ(shards[1].at("expert_share").get<double>(), 0.25);
-  EXPECT_EQ(testing::run_cli("dataset-info " + work + "/data").exit_code, 0);
+  EXPECT_EQ(testing::run_cli("dataset-info --data " + work + "/data").exit_code, 0);
   // Another beta is another run: a resume with it is refused.
-  const auto other = train("--dagger 2 --dagger-beta 0.7 --dagger-dir " + work +
-                           " --dagger-scenes 6 --dagger-stride 2 --dagger-eval-count 2");
+  const auto other =
+      run_dagger("--rounds 2 --beta 0.7 --dir " + work + " --scenes 6 --stride 2 --eval-count 2");
   EXPECT_EQ(other.exit_code, 2) << other.output;
 }
 
 TEST_F(DaggerCli, ARoundKeepsTheRetrainWithTheFewestTakeOversOnTheSelectionScenes) {
   const std::string work = dir_.file("work");
-  const auto run = train("--dagger 1 --dagger-dir " + work +
-                         " --dagger-scenes 8 --dagger-stride 2 --dagger-eval-count 2"
-                         " --dagger-candidates 2 --dagger-select-count 4 --dagger-select-seed 7"
-                         " --dagger-eval-seed 8");
+  const auto run = run_dagger("--rounds 1 --dir " + work +
+                              " --scenes 8 --stride 2 --eval-count 2"
+                              " --candidates 2 --select-count 4 --select-seed 7"
+                              " --eval-seed 8");
   ASSERT_EQ(run.exit_code, 0) << run.output;
   const auto table = read_csv(work + "/selection.csv");
   ASSERT_EQ(table.size(), 3U);  // header, two candidates of round 1
@@ -628,40 +627,40 @@ TEST_F(DaggerCli, ARoundKeepsTheRetrainWithTheFewestTakeOversOnTheSelectionScene
 
 TEST_F(DaggerCli, BadOptionsAreRefusedAndWriteNothing) {
   const std::string work = dir_.file("work");
-  for (const char* bad : {"--dagger -1",
-                          "--dagger 1 --dagger-scenes 0",
-                          "--dagger 1 --dagger-stride 0",
-                          "--dagger 1 --dagger-eval-seed 7001",
-                          "--dagger 1 --dagger-label-nodes -1",
-                          "--dagger-scenes 5",
-                          "--dagger-every-scene",
-                          "--dagger-validate-all",
-                          "--dagger 1 --dagger-rollout sideways",
-                          "--dagger-rollout gated",
-                          "--dagger 1 --dagger-past-takeover 1",
-                          "--dagger 1 --dagger-label-lookahead",
-                          "--dagger 1 --dagger-beta -0.1",
-                          "--dagger 1 --dagger-beta 1.5",
-                          "--dagger 1 --dagger-rollout gated --dagger-beta 0.5",
-                          "--dagger-beta 0.5",
-                          "--dagger 1 --dagger-learning-rate -1",
-                          "--dagger 1 --dagger-learning-rate 2",
-                          "--dagger 1 --dagger-candidates 0",
-                          "--dagger 1 --dagger-candidates 21",
-                          "--dagger 1 --dagger-candidates 2 --dagger-select-seed 2026",
-                          "--dagger 1 --dagger-candidates 2 --dagger-select-seed 7001",
-                          "--dagger 1 --dagger-candidates 2 --dagger-select-count 0",
-                          "--dagger-candidates 2",
-                          "--dagger 1 --dagger-rollout gated --dagger-past-takeover -1"}) {
+  for (const char* bad : {"--rounds -1",
+                          "--rounds 1 --scenes 0",
+                          "--rounds 1 --stride 0",
+                          "--rounds 1 --eval-seed 7001",
+                          "--rounds 1 --label-nodes -1",
+                          "--scenes 5",
+                          "--every-scene",
+                          "--validate-all",
+                          "--rounds 1 --rollout sideways",
+                          "--rollout gated",
+                          "--rounds 1 --past-takeover 1",
+                          "--rounds 1 --label-lookahead",
+                          "--rounds 1 --beta -0.1",
+                          "--rounds 1 --beta 1.5",
+                          "--rounds 1 --rollout gated --beta 0.5",
+                          "--beta 0.5",
+                          "--rounds 1 --learning-rate -1",
+                          "--rounds 1 --learning-rate 2",
+                          "--rounds 1 --candidates 0",
+                          "--rounds 1 --candidates 21",
+                          "--rounds 1 --candidates 2 --select-seed 2026",
+                          "--rounds 1 --candidates 2 --select-seed 7001",
+                          "--rounds 1 --candidates 2 --select-count 0",
+                          "--candidates 2",
+                          "--rounds 1 --rollout gated --past-takeover -1"}) {
     std::string options = bad;
-    options += " --dagger-dir ";
+    options += " --dir ";
     options += work;
-    const auto run = train(options);
+    const auto run = run_dagger(options);
     EXPECT_EQ(run.exit_code, 2) << bad << ": " << run.output;
     EXPECT_FALSE(fs::exists(work)) << bad;
   }
-  const auto missing = testing::run_cli("train --data " + dir_.file("nowhere") + " --out " +
-                                        dir_.file("model") + " --dagger 1");
+  const auto missing = testing::run_cli("dagger --data " + dir_.file("nowhere") + " --out " +
+                                        dir_.file("model") + " --rounds 1");
   EXPECT_EQ(missing.exit_code, 2) << missing.output;
   EXPECT_FALSE(fs::exists(dir_.file("model")));
 }

@@ -6,9 +6,9 @@
 
 #include "data_helpers.hpp"
 #include "lanechange/data/dataset.hpp"
-#include "lanechange/data/progress.hpp"
 #include "lanechange/error.hpp"
 #include "lanechange/expert/formulation.hpp"
+#include "lanechange/run/progress.hpp"
 #include "lanechange/sampler.hpp"
 
 namespace lanechange {
@@ -32,8 +32,7 @@ data::GenerateReport run(const data::GenerateOptions& o, int jobs,
   data::RunOptions r;
   r.jobs = jobs;
   r.solver_override = std::move(solver);
-  data::Team alone;
-  return data::generate(o, r, alone);
+  return data::generate(o, r);
 }
 
 TEST(Generate, OneAndTwoWorkersWriteTheSameFiles) {
@@ -250,7 +249,7 @@ TEST(Generate, MismatchedParametersAreRefusedAndNothingChanges) {
 }
 
 TEST(Progress, LogLineHasCountsRateAndEta) {
-  const std::string line = data::format_progress(50, 200, 10.0, false);
+  const std::string line = run::format_progress(50, 200, 10.0, false);
   EXPECT_NE(line.find("50/200"), std::string::npos) << line;
   EXPECT_NE(line.find("5.0/s"), std::string::npos) << line;
   EXPECT_NE(line.find("ETA 0:00:30"), std::string::npos) << line;
@@ -258,14 +257,14 @@ TEST(Progress, LogLineHasCountsRateAndEta) {
 }
 
 TEST(Progress, TerminalBarFillsWithTheFraction) {
-  const std::string line = data::format_progress(100, 200, 4.0, true);
+  const std::string line = run::format_progress(100, 200, 4.0, true);
   EXPECT_EQ(std::count(line.begin(), line.end(), '#'), 15) << line;
   EXPECT_NE(line.find("25.0/s"), std::string::npos) << line;
 }
 
 TEST(Progress, LogGetsPlainLinesAndAFinalOne) {
   std::ostringstream out;
-  data::Progress p(&out, false, 3, 0.0);
+  run::Progress p(&out, false, 3, 0.0);
   for (int i = 0; i < 3; ++i) p.add(1);
   p.finish();
   const std::string text = out.str();

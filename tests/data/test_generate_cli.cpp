@@ -75,7 +75,7 @@ TEST(GenerateCli, KilledRunResumesToTheUninterruptedResult) {
   ASSERT_GE(finished, 3);
   ASSERT_LT(finished, 30) << "the run was nearly done when killed; make it longer";
   EXPECT_EQ(testing::read_manifest(killed)["status"], "incomplete");
-  EXPECT_EQ(run_cli("dataset-info " + killed.string()).exit_code, 2);
+  EXPECT_EQ(run_cli("dataset-info --data " + killed.string()).exit_code, 2);
 
   const auto resumed = run_cli(joined(args));
   ASSERT_EQ(resumed.exit_code, 0) << resumed.output;
@@ -161,7 +161,7 @@ TEST(GenerateCli, DatasetInfoCountsWhatTheFilesHold) {
   TempDir dir;
   const std::string out = dir.file("d");
   ASSERT_EQ(run_cli(small_run(out, 13, 8)).exit_code, 0);
-  const auto info = run_cli("dataset-info " + out);
+  const auto info = run_cli("dataset-info --data " + out);
   ASSERT_EQ(info.exit_code, 0) << info.output;
   const auto t = testing::read_all(out, "scenarios");
   std::map<std::string, long long> labels, behaviors;
@@ -187,20 +187,20 @@ TEST(GenerateCli, DatasetInfoCountsWhatTheFilesHold) {
 TEST(GenerateCli, DatasetInfoRefusesWhatIsNotACompleteDataSet) {
   TempDir dir;
   const std::string out = dir.file("d");
-  EXPECT_EQ(run_cli("dataset-info " + out).exit_code, 2);  // missing
+  EXPECT_EQ(run_cli("dataset-info --data " + out).exit_code, 2);  // missing
   ASSERT_EQ(run_cli(small_run(out, 4, 3)).exit_code, 0);
-  ASSERT_EQ(run_cli("dataset-info " + out).exit_code, 0);
+  ASSERT_EQ(run_cli("dataset-info --data " + out).exit_code, 0);
   const std::string shard = out + "/scenarios-00000.csv";
   const std::string good = testing::read_text(shard);
   std::string changed = good;
   changed[changed.size() - 3] = changed[changed.size() - 3] == '1' ? '2' : '1';
   testing::write_text(shard, changed);
-  const auto corrupt = run_cli("dataset-info " + out);
+  const auto corrupt = run_cli("dataset-info --data " + out);
   EXPECT_EQ(corrupt.exit_code, 2);
   EXPECT_NE(corrupt.output.find("checksum"), std::string::npos) << corrupt.output;
   testing::write_text(shard, good);
   testing::write_text(out + "/manifest.json", "{\"format\": 3");
-  EXPECT_EQ(run_cli("dataset-info " + out).exit_code, 2);
+  EXPECT_EQ(run_cli("dataset-info --data " + out).exit_code, 2);
 }
 
 TEST(GenerateCli, MpiRanksWriteWhatThreadsWrite) {

@@ -122,7 +122,7 @@ TEST(Experiments, MpiRanksShareTheDataAndEvaluationStages) {
   testing::TempDir dir;
   const auto run = testing::run_cli_on_ranks(
       2, "--config " + testing::untimed_config_file(dir) +
-             " experiments --scale tiny --eval-count 1 --planners miqp,keep-lane --no-figures "
+             " experiments --scale tiny --eval-count 1 --planner miqp,keep-lane --no-figures "
              "--jobs 1 --out " +
              dir.file("run"));
   ASSERT_EQ(run.exit_code, 0) << run.output;

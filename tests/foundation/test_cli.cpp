@@ -1,6 +1,10 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <filesystem>
+#include <sstream>
+#include <string>
+#include <vector>
 
 #include "test_helpers.hpp"
 
@@ -106,6 +110,58 @@ TEST(Cli, BadConfigLeavesWrittenFilesIntact) {
           .exit_code,
       2);
   EXPECT_FALSE(std::filesystem::exists(out_dir));
+}
+
+}  // namespace
+}  // namespace lanechange
+
+namespace lanechange {
+namespace {
+
+// The subcommands `lanechange --help` lists, read from its "Subcommands:" block.
+std::vector<std::string> listed_subcommands() {
+  const auto help = testing::run_cli("--help");
+  std::vector<std::string> names;
+  std::istringstream in(help.output);
+  bool in_block = false;
+  for (std::string line; std::getline(in, line);) {
+    if (line.rfind("Subcommands:", 0) == 0) {
+      in_block = true;
+    } else if (in_block && line.size() > 2 && line[0] == ' ' && line[2] != ' ') {
+      names.push_back(line.substr(2, line.find(' ', 2) - 2));
+    }
+  }
+  return names;
+}
+
+TEST(Cli, EverySubcommandHasHelp) {
+  const std::vector<std::string> names = listed_subcommands();
+  for (const char* expected :
+       {"validate", "sample", "config", "plan", "plot", "generate", "dataset-info", "train",
+        "dagger", "model-info", "simulate", "evaluate", "experiments", "crosscheck", "label-study",
+        "strategy-study", "authors-study"}) {
+    EXPECT_NE(std::find(names.begin(), names.end(), expected), names.end()) << expected;
+  }
+  for (const std::string& name : names) {
+    const auto help = testing::run_cli(name + " --help");
+    EXPECT_EQ(help.exit_code, 0) << name << ": " << help.output;
+    EXPECT_NE(help.output.find("Usage:"), std::string::npos) << name << ": " << help.output;
+  }
+}
+
+// One spelling for one thing: every subcommand that draws scenes takes
+// --behavior with the default "all", and every one that runs planners --planner.
+TEST(Cli, SharedOptionsHaveOneNameAndDefault) {
+  for (const char* name : {"sample", "generate", "evaluate", "strategy-study"}) {
+    const auto help = testing::run_cli(std::string(name) + " --help");
+    EXPECT_NE(help.output.find("--behavior TEXT=all"), std::string::npos) << name;
+  }
+  for (const char* name : {"simulate", "evaluate", "experiments"}) {
+    const auto help = testing::run_cli(std::string(name) + " --help");
+    EXPECT_NE(help.output.find("--planner"), std::string::npos) << name;
+    EXPECT_EQ(help.output.find("--planners"), std::string::npos) << name;
+  }
+  EXPECT_EQ(testing::run_cli("train --help").output.find("--dagger"), std::string::npos);
 }
 
 }  // namespace

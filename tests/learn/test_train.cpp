@@ -200,10 +200,10 @@ TEST_F(Trained, DamagedOrForeignModelsAreRefused) {
   const fs::path svm = copy / "classifiers" / "plain" / "svm.libsvm";
   fs::resize_file(svm, fs::file_size(svm) / 2);
   EXPECT_THROW((void)Model::load(copy.string()), InputError);
-  const auto info = testing::run_cli("model-info " + copy.string());
+  const auto info = testing::run_cli("model-info --model " + copy.string());
   EXPECT_EQ(info.exit_code, 2) << info.output;
   EXPECT_NE(info.output.find("checksum"), std::string::npos) << info.output;
-  const auto good = testing::run_cli("model-info " + model_dir());
+  const auto good = testing::run_cli("model-info --model " + model_dir());
   EXPECT_EQ(good.exit_code, 0) << good.output;
 
   fs::remove_all(copy);

@@ -6,6 +6,7 @@
 #include <fstream>
 
 #include "lanechange/error.hpp"
+#include "lanechange/run/quantile.hpp"
 #include "lanechange/sim/evaluate.hpp"
 #include "test_helpers.hpp"
 
@@ -134,12 +135,12 @@ TEST(Evaluate, RolloutsReadBackAsWrittenAndAForeignFileIsNamed) {
 
 TEST(NearestRank, IsAnElementOfTheFiniteValuesAtItsRank) {
   const std::vector<double> v = {5, NAN, 1, 4, INFINITY, 2, 3};
-  EXPECT_EQ(sim::nearest_rank(v, 0.5), 3);  // rank ceil(0.5 * 5) = 3 of 1..5
-  EXPECT_EQ(sim::nearest_rank(v, 1.0), 5);
-  EXPECT_EQ(sim::nearest_rank(v, 0.01), 1);
-  EXPECT_EQ(sim::nearest_rank(v, 0.99), 5);
-  EXPECT_TRUE(std::isnan(sim::nearest_rank({NAN}, 0.5)));
-  EXPECT_TRUE(std::isnan(sim::nearest_rank({}, 0.5)));
+  EXPECT_EQ(run::nearest_rank(v, 0.5), 3);  // rank ceil(0.5 * 5) = 3 of 1..5
+  EXPECT_EQ(run::nearest_rank(v, 1.0), 5);
+  EXPECT_EQ(run::nearest_rank(v, 0.01), 1);
+  EXPECT_EQ(run::nearest_rank(v, 0.99), 5);
+  EXPECT_TRUE(std::isnan(run::nearest_rank({NAN}, 0.5)));
+  EXPECT_TRUE(std::isnan(run::nearest_rank({}, 0.5)));
 }
 
 TEST(Evaluate, MpiRanksWriteWhatThreadsWrite) {

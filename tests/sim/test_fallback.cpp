@@ -150,8 +150,7 @@ TEST(LaneKeeper, KeepsUpWithAFasterCarClosingInFromBehind) {
       keeper.control(o.ego, scene.lane_width, std::nullopt, planner::car_behind(o, true));
   EXPECT_GT(with_behind.a, ahead_only.a + 0.5);
   EXPECT_GT(closest_gap_behind(scene, config, 15.0), config.idm.min_gap);  // bumper to bumper
-  // The keeper of stop 30 and before, which watched the car ahead only, is
-  // driven into.
+  // A keeper that watches the car ahead only is driven into.
   config.closed_loop.keeper_rear_horizon = 0.0;
   EXPECT_LT(closest_gap_behind(scene, config, 15.0), 0.0);
 }

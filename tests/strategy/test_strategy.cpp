@@ -12,9 +12,9 @@
 #include "lanechange/error.hpp"
 #include "lanechange/expert/planner.hpp"
 #include "lanechange/learn/strategy.hpp"
-#include "lanechange/planner/strategy_study.hpp"
 #include "lanechange/sampler.hpp"
 #include "lanechange/sim/simulator.hpp"
+#include "lanechange/studies/strategy_study.hpp"
 #include "lanechange/traffic.hpp"
 #include "planner/strategy_qp_planner.hpp"
 #include "test_helpers.hpp"
@@ -674,11 +674,11 @@ TEST(Strategy, TheStudyOnMemorisedScenesFollowsTheirOwnStrategies) {
     labels.push_back(learn::strategy_of(lane_modes_of(r)));
   }
   ASSERT_GE(scenes.size(), 2U);
-  planner::StrategyStudyOptions o;
+  studies::StrategyStudyOptions o;
   o.config = config;
   o.count = 6;
   o.seed = seed;
-  const nlohmann::json study = planner::run_strategy_study(o, model_of(scenes, labels));
+  const nlohmann::json study = studies::run_strategy_study(o, model_of(scenes, labels));
   const auto& records = study.at("per_scene");
   ASSERT_EQ(records.size(), study.at("expert_plans").get<std::size_t>());
   ASSERT_GE(records.size(), 1U);
@@ -705,7 +705,7 @@ TEST(Strategy, TheStudyOnMemorisedScenesFollowsTheirOwnStrategies) {
   EXPECT_GT(study.at("us_per_qp_iteration_without_fallback").at("median").get<double>(), 0.0);
   // Every scene held, so the report lists none; a scene whose candidates all
   // failed is listed with the nodes where each strategy switches lanes.
-  EXPECT_EQ(planner::strategy_study_markdown(study).find("no candidate held"), std::string::npos);
+  EXPECT_EQ(studies::strategy_study_markdown(study).find("no candidate held"), std::string::npos);
   nlohmann::json unheld = study;
   auto& scene = unheld["per_scene"][0];
   for (auto& c : scene["candidates"]) c["outcome"] = "infeasible";
@@ -715,7 +715,7 @@ TEST(Strategy, TheStudyOnMemorisedScenesFollowsTheirOwnStrategies) {
     return at == std::string::npos ? std::string("-") : std::to_string(at + 1);
   };
   const std::string switches = node('1') + "/" + node('2');
-  const std::string md = planner::strategy_study_markdown(unheld);
+  const std::string md = studies::strategy_study_markdown(unheld);
   EXPECT_NE(md.find("no candidate held"), std::string::npos) << md;
   EXPECT_NE(md.find("| " + std::to_string(scene["index"].get<int>()) + " | " +
                     scene["behavior"].get<std::string>() + " | " + switches + " |"),

@@ -1,9 +1,7 @@
 #pragma once
-// DAgger for the action network (Ross et al. 2011; docs/strategy.md,
-// "DAgger"): roll the learner out in closed loop on training scenes, ask
-// the expert to plan from the states it visits, add those labels to the
-// data, retrain the network, and measure mlp-miqp on held-out scenes after
-// every round.
+// DAgger for the action network (Ross et al. 2011; docs/dagger.md): roll the learner out in closed
+// loop on training scenes, ask the expert to plan from the states it visits, add those labels to
+// the data, retrain the network, and measure mlp-miqp on held-out scenes after every round.
 #include <cstdint>
 #include <ostream>
 #include <string>
@@ -89,8 +87,8 @@ struct DaggerOptions {
   /// (never the held-out evaluation's), the same every round.
   long long select_count = 300;
   std::uint64_t select_seed = 7002;
-  /// Early stopping of a retrain also on DAgger rows (the first version's
-  /// behaviour); by default on the base's own validation rows only.
+  /// Early stopping of a retrain also on DAgger rows; by default on the
+  /// base's own validation rows only.
   bool validate_on_dagger = false;
   Config config;  ///< the closed loop's (rollouts, labels, evaluations)
   int jobs = 0;   ///< threads; 0: one per core

@@ -15,6 +15,7 @@
 
 #include "lanechange/config.hpp"
 #include "lanechange/expert/lane_change_solver.hpp"
+#include "lanechange/run/team.hpp"
 #include "lanechange/scenario.hpp"
 
 namespace lanechange::data {
@@ -43,26 +44,9 @@ struct RunOptions {
   /// A back-end to use instead of the one named in GenerateOptions (tests
   /// inject failing solvers here). It must be const and thread-safe.
   std::shared_ptr<const expert::LaneChangeSolver> solver_override;
+  /// The MPI ranks sharing the run (shard s on rank s mod size); none: alone.
+  run::Team* team = nullptr;
 };
-
-/// The processes that share one run: MPI ranks, or one process alone. Shard
-/// s belongs to rank s mod size; rank 0 prepares the directory and writes
-/// the final manifest.
-class Team {
- public:
-  virtual ~Team() = default;
-  [[nodiscard]] virtual int rank() const { return 0; }
-  [[nodiscard]] virtual int size() const { return 1; }
-  virtual void barrier() {}
-  /// Rank 0's value, returned on every rank.
-  virtual int broadcast(int value) { return value; }
-};
-
-/// Runs `decide` on rank 0 alone and returns its non-negative answer on
-/// every rank, so that all ranks stop (or go on) together. Rank 0 rethrows
-/// what `decide` threw; the other ranks throw InputError (naming `field`)
-/// for an InputError there and std::runtime_error for anything else.
-int decide_on_rank_zero(Team& team, const std::string& field, const std::function<int()>& decide);
 
 struct GenerateReport {
   long long shards_total = 0;
@@ -75,7 +59,7 @@ struct GenerateReport {
 
 /// Generates (or resumes) the data set. Throws InputError for bad options or
 /// for a directory that holds another data set (leaving it untouched).
-GenerateReport generate(const GenerateOptions& options, const RunOptions& run, Team& team);
+GenerateReport generate(const GenerateOptions& options, const RunOptions& run);
 
 /// The parameters block of the manifest; a resume must match it exactly.
 [[nodiscard]] nlohmann::json dataset_parameters(const GenerateOptions& options);

@@ -32,7 +32,7 @@ struct ExperimentSizes {
   /// Scenes drawn for every planner: a congested one and ill-posed ones (the
   /// paper's Figs. 4 and 5).
   int example_scenes = 4;
-  /// DAgger on the experiments' model (issue 14): rounds and the training
+  /// DAgger on the experiments' model (docs/dagger.md): rounds and the training
   /// scenes rolled out per round; mlp-miqp is scored after every round on as
   /// many held-out scenes as Table II has, of all behaviors.
   int dagger_rounds = 0;
@@ -54,7 +54,7 @@ struct ExperimentOptions {
   /// The MPI ranks sharing the run: the data and evaluation stages split
   /// their shards over them; rank 0 alone trains, draws and writes the
   /// report. None: this process alone.
-  data::Team* team = nullptr;
+  run::Team* team = nullptr;
 };
 
 struct StageRecord {

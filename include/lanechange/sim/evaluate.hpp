@@ -42,7 +42,7 @@ struct EvaluateRun {
   std::ostream* progress = nullptr;
   bool progress_on_terminal = false;
   /// The MPI ranks sharing the run (shard s on rank s mod size); none: alone.
-  data::Team* team = nullptr;
+  run::Team* team = nullptr;
 };
 
 struct EvaluateReport {
@@ -84,10 +84,6 @@ struct RolloutRates {
 /// Reads a rollouts.csv (or one of its shards). InputError naming the file
 /// for a missing file, a header that is not ours, or a malformed row.
 [[nodiscard]] std::vector<RolloutRow> read_rollouts(const std::string& path);
-
-/// The nearest-rank q-quantile (0 < q <= 1) of the finite values; NaN if
-/// there are none. Every table of rollouts uses this one definition.
-[[nodiscard]] double nearest_rank(std::vector<double> values, double q);
 
 /// The column names of rollouts.csv and summary.csv.
 [[nodiscard]] std::vector<std::string> rollout_columns();

@@ -1,11 +1,11 @@
-#include "lanechange/data/progress.hpp"
+#include "lanechange/run/progress.hpp"
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <utility>
 
-namespace lanechange::data {
+namespace lanechange::run {
 
 namespace {
 
@@ -74,4 +74,4 @@ void Progress::print_locked(Clock::time_point now) {
   *out_ << std::flush;
 }
 
-}  // namespace lanechange::data
+}  // namespace lanechange::run

@@ -1,4 +1,4 @@
-#include "lanechange/planner/strategy_study.hpp"
+#include "lanechange/studies/strategy_study.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -8,27 +8,26 @@
 
 #include "lanechange/error.hpp"
 #include "lanechange/learn/model.hpp"
+#include "lanechange/run/markdown.hpp"
+#include "lanechange/run/quantile.hpp"
 #include "lanechange/sampler.hpp"
 #include "planner/strategy_qp_planner.hpp"
 
-namespace lanechange::planner {
+namespace lanechange::studies {
+
+using planner::CandidateOutcome;
+using planner::StrategyPlan;
+using planner::StrategyQpPlanner;
 
 using nlohmann::json;
 
 namespace {
 
-double quantile(std::vector<double> v, double q) {
-  if (v.empty()) return NAN;
-  std::sort(v.begin(), v.end());
-  const auto at = static_cast<std::size_t>(std::ceil(q * double(v.size()))) - 1;
-  return v[std::min(at, v.size() - 1)];
-}
-
 json summary(const std::vector<double>& v) {
   if (v.empty()) return {{"count", 0}};
   return {{"count", v.size()},
-          {"median", quantile(v, 0.5)},
-          {"p95", quantile(v, 0.95)},
+          {"median", run::nearest_rank(v, 0.5)},
+          {"p95", run::nearest_rank(v, 0.95)},
           {"max", *std::max_element(v.begin(), v.end())}};
 }
 
@@ -147,8 +146,8 @@ json run_strategy_study(const StrategyStudyOptions& o,
     }
   }
   const double plans = double(std::max<long long>(t.expert_plans, 1));
-  const double expert_median = quantile(t.expert_ms, 0.5);
-  const double strategy_median = quantile(t.strategy_ms, 0.5);
+  const double expert_median = run::nearest_rank(t.expert_ms, 0.5);
+  const double strategy_median = run::nearest_rank(t.strategy_ms, 0.5);
   return {{"model", o.model_dir},
           {"seed", o.seed},
           {"scenes", t.scenes},
@@ -193,7 +192,7 @@ std::string switch_nodes(const std::string& strategy) {
 // The scenes with an expert plan where none of the k strategies held, with
 // the switch nodes of the exact plan and of each candidate.
 std::string unheld_scenes_markdown(const json& s) {
-  std::string rows;
+  run::Table table{{"scene", "behavior", "exact plan", "candidates"}, {}};
   for (const json& r : s.value("per_scene", json::array())) {
     std::string candidates;
     bool held = false;
@@ -202,83 +201,75 @@ std::string unheld_scenes_markdown(const json& s) {
       candidates += (candidates.empty() ? "" : ", ") + switch_nodes(c.at("strategy"));
     }
     if (held) continue;
-    rows += "| " + std::to_string(r.at("index").get<int>()) + " | " +
-            r.at("behavior").get<std::string>() + " | " + switch_nodes(r.at("exact_strategy")) +
-            " | " + candidates + " |\n";
+    table.rows.push_back({std::to_string(r.at("index").get<int>()),
+                          r.at("behavior").get<std::string>(), switch_nodes(r.at("exact_strategy")),
+                          candidates});
   }
-  if (rows.empty()) return "";
+  if (table.rows.empty()) return "";
   return "\nScenes with an expert plan where no candidate held (switch nodes: first node across "
-         "the line / first wholly in the target lane):\n\n| scene | behavior | exact plan | "
-         "candidates |\n|---|---|---|---|\n" +
-         rows;
+         "the line / first wholly in the target lane):\n\n" +
+         run::markdown(table);
+}
+
+std::string number(const json& v, const char* format) {
+  if (!v.is_number()) return "–";
+  char buffer[32];
+  std::snprintf(buffer, sizeof buffer, format, v.get<double>());
+  return buffer;
+}
+
+std::string percent(double share) { return number(100.0 * share, "%.1f%%"); }
+
+std::string headline_markdown(const json& s) {
+  const run::Table table{
+      {"scenes", "expert plans", "top-1 feasible", "top-k feasible", "top-k followed",
+       "exact fallbacks", "speedup (medians)"},
+      {{std::to_string(s.at("scenes").get<long long>()),
+        std::to_string(s.at("expert_plans").get<long long>()),
+        percent(s.at("top1_feasible").get<double>()), percent(s.at("topk_feasible").get<double>()),
+        percent(s.at("topk_followed").get<double>()),
+        std::to_string(s.at("exact_fallbacks").get<long long>()),
+        number(s.at("speedup_of_medians"), "%.1f")}}};
+  std::string out = run::markdown(table);
+  if (s.contains("own_strategy_holds")) {
+    out += "\nThe exact plan's own strategy, fixed, holds in " +
+           percent(s.at("own_strategy_holds").get<double>()) +
+           " of the scenes with an expert plan: what a perfect vote's top-1 would get.\n";
+  }
+  out += "\nCandidates of the scenes with an expert plan:";
+  for (const auto& [what, n] : s.at("candidate_outcomes").items()) {
+    out += " " + what + " " + std::to_string(n.get<long long>()) + ";";
+  }
+  return out + "\n\n";
+}
+
+std::string measures_markdown(const json& s) {
+  run::Table table{{"measure", "median", "p95", "worst"}, {}};
+  const auto row = [&](const char* what, const json& v) {
+    table.rows.push_back({what, number(v.value("median", json()), "%.4f"),
+                          number(v.value("p95", json()), "%.4f"),
+                          number(v.value("max", json()), "%.4f")});
+  };
+  row("cost / exact optimum (all expert plans)", s.at("cost_ratio"));
+  row("cost / exact optimum (learned strategy followed)", s.at("cost_ratio_learned"));
+  row("strategy-qp ms per plan", s.at("strategy_ms"));
+  row("strategy-qp ms per plan, no fallback", s.at("strategy_ms_without_fallback"));
+  row("exact expert ms per plan", s.at("expert_ms"));
+  row("candidates whose rounds ran, per plan", s.at("candidates_run_per_plan"));
+  row("strategy prediction ms", s.at("predict_ms"));
+  row("screen ms (one QP per candidate)", s.at("screen_ms"));
+  row("rounds of the candidate followed", s.at("followed_rounds"));
+  row("its rounds' ms (with the collision check)", s.at("followed_rounds_ms"));
+  row("QP iterations per plan, no fallback", s.at("qp_iterations_without_fallback"));
+  row("µs per QP iteration (plan time / iterations), no fallback",
+      s.at("us_per_qp_iteration_without_fallback"));
+  return run::markdown(table);
 }
 
 }  // namespace
 
 std::string strategy_study_markdown(const json& s) {
-  auto number = [](const json& v, const char* format) {
-    if (!v.is_number()) return std::string("–");
-    char buffer[32];
-    std::snprintf(buffer, sizeof buffer, format, v.get<double>());
-    return std::string(buffer);
-  };
-  auto row = [&number](std::string& out, const char* what, const json& v) {
-    out += "| ";
-    out += what;
-    out += " | ";
-    out += number(v.value("median", json()), "%.4f");
-    out += " | ";
-    out += number(v.value("p95", json()), "%.4f");
-    out += " | ";
-    out += number(v.value("max", json()), "%.4f");
-    out += " |\n";
-  };
-  std::string out = "| scenes | expert plans | top-1 feasible | top-k feasible |";
-  out +=
-      " top-k followed | exact fallbacks | speedup (medians) |\n|---|---|---|---|---|---|---|\n| ";
-  out += std::to_string(s.at("scenes").get<long long>());
-  out += " | ";
-  out += std::to_string(s.at("expert_plans").get<long long>());
-  out += " | ";
-  out += number(100.0 * s.at("top1_feasible").get<double>(), "%.1f%%");
-  out += " | ";
-  out += number(100.0 * s.at("topk_feasible").get<double>(), "%.1f%%");
-  out += " | ";
-  out += number(100.0 * s.at("topk_followed").get<double>(), "%.1f%%");
-  out += " | ";
-  out += std::to_string(s.at("exact_fallbacks").get<long long>());
-  out += " | ";
-  out += number(s.at("speedup_of_medians"), "%.1f");
-  if (s.contains("own_strategy_holds")) {
-    out += " |\n\nThe exact plan's own strategy, fixed, holds in ";
-    out += number(100.0 * s.at("own_strategy_holds").get<double>(), "%.1f%%");
-    out += " of the scenes with an expert plan: what a perfect vote's top-1 would get.\n";
-  } else {
-    out += " |\n";
-  }
-  out += "\nCandidates of the scenes with an expert plan:";
-  for (const auto& [what, n] : s.at("candidate_outcomes").items()) {
-    out += " ";
-    out += what;
-    out += " ";
-    out += std::to_string(n.get<long long>());
-    out += ";";
-  }
-  out += "\n\n| measure | median | p95 | worst |\n|---|---|---|---|\n";
-  row(out, "cost / exact optimum (all expert plans)", s.at("cost_ratio"));
-  row(out, "cost / exact optimum (learned strategy followed)", s.at("cost_ratio_learned"));
-  row(out, "strategy-qp ms per plan", s.at("strategy_ms"));
-  row(out, "strategy-qp ms per plan, no fallback", s.at("strategy_ms_without_fallback"));
-  row(out, "exact expert ms per plan", s.at("expert_ms"));
-  row(out, "candidates whose rounds ran, per plan", s.at("candidates_run_per_plan"));
-  row(out, "strategy prediction ms", s.at("predict_ms"));
-  row(out, "screen ms (one QP per candidate)", s.at("screen_ms"));
-  row(out, "rounds of the candidate followed", s.at("followed_rounds"));
-  row(out, "its rounds' ms (with the collision check)", s.at("followed_rounds_ms"));
-  row(out, "QP iterations per plan, no fallback", s.at("qp_iterations_without_fallback"));
-  row(out, "µs per QP iteration (plan time / iterations), no fallback",
-      s.at("us_per_qp_iteration_without_fallback"));
-  return out + unheld_scenes_markdown(s);
+  return headline_markdown(s) + measures_markdown(s) + unheld_scenes_markdown(s);
 }
 
-}  // namespace lanechange::planner
+}  // namespace lanechange::studies

@@ -7,7 +7,7 @@
 #include <string>
 #include <string_view>
 
-namespace lanechange::data {
+namespace lanechange::run {
 
 /// One progress line: done/total, rate and ETA (a bar on a terminal).
 /// `label` starts a log line ("generate: ..."); `unit` names what is counted.
@@ -40,4 +40,4 @@ class Progress {
   std::mutex mutex_;
 };
 
-}  // namespace lanechange::data
+}  // namespace lanechange::run

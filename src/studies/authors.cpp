@@ -1,9 +1,11 @@
-#include "lanechange/expert/authors_records.hpp"
+#include "lanechange/studies/authors.hpp"
 
 #include <algorithm>
 #include <atomic>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <mutex>
 #include <nlohmann/json.hpp>
@@ -11,8 +13,13 @@
 #include <thread>
 
 #include "lanechange/error.hpp"
+#include "lanechange/run/quantile.hpp"
+#include "run/json_numbers.hpp"
 
-namespace lanechange::expert {
+namespace lanechange::studies {
+
+// The comparison reads our expert's problem, solvers and plans throughout.
+using namespace expert;
 
 using nlohmann::json;
 
@@ -522,14 +529,7 @@ std::vector<Quantile> quantiles(std::vector<double> values, const std::vector<do
   std::sort(values.begin(), values.end());
   std::vector<Quantile> out;
   for (double q : qs) {
-    Quantile entry{q, kNotANumber};
-    if (!values.empty()) {
-      const double pos = q * static_cast<double>(values.size() - 1);
-      const auto lo = static_cast<std::size_t>(std::floor(pos));
-      const std::size_t hi = std::min(lo + 1, values.size() - 1);
-      entry.value = values[lo] + (pos - static_cast<double>(lo)) * (values[hi] - values[lo]);
-    }
-    out.push_back(entry);
+    out.push_back({q, values.empty() ? kNotANumber : run::nearest_rank_sorted(values, q)});
   }
   return out;
 }
@@ -611,25 +611,23 @@ AuthorsSummary summarize(const std::vector<AuthorsComparison>& all, double toler
 
 namespace {
 
-json number_or_null(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }
-
 json terms_json(const AuthorsTerms& t) {
-  return json::array(
-      {number_or_null(t[0]), number_or_null(t[1]), number_or_null(t[2]), number_or_null(t[3])});
+  return json::array({run::number_or_null(t[0]), run::number_or_null(t[1]),
+                      run::number_or_null(t[2]), run::number_or_null(t[3])});
 }
 
 json violation_json(const PathViolation& v) {
-  return {{"dynamics", number_or_null(v.dynamics)},
-          {"bounds", number_or_null(v.bounds)},
-          {"lanes", number_or_null(v.lanes)}};
+  return {{"dynamics", run::number_or_null(v.dynamics)},
+          {"bounds", run::number_or_null(v.bounds)},
+          {"lanes", run::number_or_null(v.lanes)}};
 }
 
 json check_json(const TheirProblemCheck& t) {
-  return {{"their_objective", number_or_null(t.their_objective)},
+  return {{"their_objective", run::number_or_null(t.their_objective)},
           {"violation", violation_json(t.violation)},
           {"status", to_string(t.status)},
-          {"optimum", number_or_null(t.optimum)},
-          {"relative", number_or_null(t.relative)}};
+          {"optimum", run::number_or_null(t.optimum)},
+          {"relative", run::number_or_null(t.relative)}};
 }
 
 json quantiles_json(const std::vector<Quantile>& qs) {
@@ -637,7 +635,7 @@ json quantiles_json(const std::vector<Quantile>& qs) {
   for (const Quantile& q : qs) {
     char key[16];
     std::snprintf(key, sizeof key, "p%g", 100.0 * q.q);
-    out[key] = number_or_null(q.value);
+    out[key] = run::number_or_null(q.value);
   }
   return out;
 }
@@ -648,8 +646,8 @@ void to_json(json& out, const AuthorsComparison& c) {
   json pdx = json::object(), pdv = json::object();
   for (Car car : kAllCars) {
     const auto i = static_cast<std::size_t>(car);
-    pdx[std::string(to_string(car))] = number_or_null(c.prediction_max_dx[i]);
-    pdv[std::string(to_string(car))] = number_or_null(c.prediction_max_dv[i]);
+    pdx[std::string(to_string(car))] = run::number_or_null(c.prediction_max_dx[i]);
+    pdv[std::string(to_string(car))] = run::number_or_null(c.prediction_max_dv[i]);
   }
   out = {{"id", c.id},
          {"line", c.line},
@@ -659,27 +657,27 @@ void to_json(json& out, const AuthorsComparison& c) {
          {"our_label", to_string(c.our_label)},
          {"iterations", c.iterations},
          {"ms", c.ms},
-         {"our_objective", number_or_null(c.our_objective)},
+         {"our_objective", run::number_or_null(c.our_objective)},
          {"our_terms", terms_json(c.our_terms)},
-         {"their_objective", number_or_null(c.their_objective)},
+         {"their_objective", run::number_or_null(c.their_objective)},
          {"their_terms", terms_json(c.their_terms)},
-         {"relative_difference", number_or_null(c.relative_difference)},
-         {"max_dx", number_or_null(c.max_dx)},
-         {"max_dy", number_or_null(c.max_dy)},
-         {"max_dv", number_or_null(c.max_dv)},
+         {"relative_difference", run::number_or_null(c.relative_difference)},
+         {"max_dx", run::number_or_null(c.max_dx)},
+         {"max_dy", run::number_or_null(c.max_dy)},
+         {"max_dv", run::number_or_null(c.max_dv)},
          {"our_first_cross_node", c.our_first_cross_node},
          {"their_first_cross_node", c.their_first_cross_node},
-         {"their_objective_in_our_qp", number_or_null(c.their_objective_in_our_qp)},
+         {"their_objective_in_our_qp", run::number_or_null(c.their_objective_in_our_qp)},
          {"their_violation_in_our_qp", violation_json(c.their_violation_in_our_qp)},
-         {"our_qp_rebuild_error", number_or_null(c.our_qp_rebuild_error)},
+         {"our_qp_rebuild_error", run::number_or_null(c.our_qp_rebuild_error)},
          {"with_their_prediction", check_json(c.with_their_prediction)},
          {"with_our_prediction", check_json(c.with_our_prediction)},
-         {"their_gap", number_or_null(c.their_gap)},
-         {"prediction_effect", number_or_null(c.prediction_effect)},
-         {"fixpoint_effect", number_or_null(c.fixpoint_effect)},
+         {"their_gap", run::number_or_null(c.their_gap)},
+         {"prediction_effect", run::number_or_null(c.prediction_effect)},
+         {"fixpoint_effect", run::number_or_null(c.fixpoint_effect)},
          {"prediction_max_dx", pdx},
          {"prediction_max_dv", pdv},
-         {"target_end_dx", number_or_null(c.target_end_dx)},
+         {"target_end_dx", run::number_or_null(c.target_end_dx)},
          {"agreement", to_string(c.agreement)},
          {"cause", to_string(c.cause)}};
 }
@@ -791,4 +789,32 @@ std::string to_markdown(const AuthorsSummary& s) {
   return o.str();
 }
 
-}  // namespace lanechange::expert
+std::string run_authors_study(const AuthorsStudyOptions& o) {
+  const std::vector<AuthorsRecord> records = load_authors_records(o.records_path, o.config);
+  std::filesystem::create_directories(o.out_dir);
+  const std::filesystem::path out(o.out_dir);
+  const auto start = std::chrono::steady_clock::now();
+  const auto results =
+      compare_with_authors(records, authors_planner(o.config), o.settings, o.progress);
+  const double wall =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  std::ofstream lines(out / "comparisons.jsonl");
+  for (const AuthorsComparison& c : results) lines << nlohmann::json(c).dump() << "\n";
+  const AuthorsSummary summary = summarize(results, o.settings.tolerance);
+  nlohmann::json j = summary;
+  j["wall_s"] = wall;
+  j["threads"] = o.settings.threads;
+  std::ofstream(out / "summary.json") << j.dump(2) << "\n";
+  const std::string md = to_markdown(summary);
+  std::ofstream markdown(out / "summary.md");
+  markdown << md;
+  lines.close();
+  markdown.close();
+  if (!lines || !markdown) throw InputError("--out", o.out_dir + " cannot be written");
+  char wall_line[120];
+  std::snprintf(wall_line, sizeof wall_line, "Wall time %g s on %d thread(s).\n", wall,
+                o.settings.threads);
+  return md + wall_line;
+}
+
+}  // namespace lanechange::studies

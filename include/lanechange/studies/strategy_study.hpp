@@ -15,7 +15,7 @@
 #include "lanechange/learn/strategy.hpp"
 #include "lanechange/scenario.hpp"
 
-namespace lanechange::planner {
+namespace lanechange::studies {
 
 struct StrategyStudyOptions {
   Config config;
@@ -41,4 +41,4 @@ struct StrategyStudyOptions {
 /// The study as a Markdown table.
 [[nodiscard]] std::string strategy_study_markdown(const nlohmann::json& study);
 
-}  // namespace lanechange::planner
+}  // namespace lanechange::studies

@@ -34,7 +34,15 @@
 #include "lanechange/scenario.hpp"
 #include "lanechange/traffic.hpp"
 
-namespace lanechange::expert {
+namespace lanechange::studies {
+
+using expert::ExpertPlanner;
+using expert::Iterate;
+using expert::kInfinity;
+using expert::LaneChangeQp;
+using expert::MiqpStatus;
+using expert::PlanLimits;
+using expert::PlanStatus;
 
 inline constexpr double kNotANumber = std::numeric_limits<double>::quiet_NaN();
 
@@ -256,4 +264,18 @@ void to_json(nlohmann::json& out, const AuthorsSummary& summary);
 /// The summary as Markdown tables.
 [[nodiscard]] std::string to_markdown(const AuthorsSummary& summary);
 
-}  // namespace lanechange::expert
+/// `lanechange authors-study`: every record compared, written to out_dir as
+/// comparisons.jsonl (one comparison a line), summary.json and summary.md.
+struct AuthorsStudyOptions {
+  std::string records_path;  ///< the authors' records (JSON lines)
+  std::string out_dir;
+  Config config = make_preset("authors");
+  AuthorsComparisonSettings settings;
+  AuthorsProgress progress = nullptr;
+};
+
+/// Runs the study and returns summary.md's text (with the wall time).
+/// InputError for unreadable records or an output that cannot be written.
+[[nodiscard]] std::string run_authors_study(const AuthorsStudyOptions& options);
+
+}  // namespace lanechange::studies

@@ -2,11 +2,9 @@
 // and prediction as we read them, and our `authors` preset against them.
 //
 // The records live outside the repository. They are looked for in
-// $LANECHANGE_AUTHORS_RECORDS, then <source>/../shared/reference/, then
-// /work/shared/reference/; the tests that need them skip when none exists.
-//
-// The full comparison (all 1283 records, a few minutes) is the disabled test
-// AuthorsComparison.DISABLED_AllRecords; see docs/authors_comparison.md.
+// <source>/../shared/reference/, then /work/shared/reference/; the tests that
+// need them skip when none exists. The full comparison is the command
+// `lanechange authors-study` (docs/authors_comparison.md).
 #include <gtest/gtest.h>
 
 #include <chrono>
@@ -19,15 +17,12 @@
 #include <string>
 
 #include "lanechange/error.hpp"
-#include "lanechange/expert/authors_records.hpp"
+#include "lanechange/studies/authors.hpp"
 
-namespace lanechange::expert {
+namespace lanechange::studies {
 namespace {
 
 std::string records_path() {
-  if (const char* env = std::getenv("LANECHANGE_AUTHORS_RECORDS"); env != nullptr && *env != 0) {
-    return env;
-  }
   for (const std::string& candidate :
        {std::string(LANECHANGE_SOURCE_DIR) + "/../shared/reference/authors_idm.jsonl",
         std::string("/work/shared/reference/authors_idm.jsonl")}) {
@@ -46,9 +41,9 @@ const std::vector<AuthorsRecord>& all_records() {
   return records;
 }
 
-#define REQUIRE_RECORDS()                                                           \
-  if (all_records().empty()) {                                                      \
-    GTEST_SKIP() << "authors_idm.jsonl not found (set LANECHANGE_AUTHORS_RECORDS)"; \
+#define REQUIRE_RECORDS()                          \
+  if (all_records().empty()) {                     \
+    GTEST_SKIP() << "authors_idm.jsonl not found"; \
   }
 
 // A small valid record: the scenario of record data2.mat{1}, and either no
@@ -208,7 +203,8 @@ TEST(AuthorsRecords, OurPredictionAlongTheirPathIsClose) {
     if (!r.solved) continue;
     const auto ego = [&] {
       std::vector<EgoFootprint> out;
-      for (const State& z : r.solution.states) out.push_back({z[kX], z[kY], z[kV]});
+      for (const expert::State& z : r.solution.states)
+        out.push_back({z[expert::kX], z[expert::kY], z[expert::kV]});
       return out;
     }();
     const int lead = config.expert.prediction_lead_steps;
@@ -296,7 +292,8 @@ TEST(AuthorsRecords, PredictionMatchesTheirsExactly) {
   for (const AuthorsRecord& r : all_records()) {
     if (!r.solved) continue;
     std::vector<EgoFootprint> ego;
-    for (const State& z : r.solution.states) ego.push_back({z[kX], z[kY], z[kV]});
+    for (const expert::State& z : r.solution.states)
+      ego.push_back({z[expert::kX], z[expert::kY], z[expert::kV]});
     const auto mine = predict_traffic(r.scenario, config, r.scenario.steps + lead, 0.1, &ego);
     for (Car car : {Car::Leader, Car::Target}) {
       for (int k = 0; k <= r.scenario.steps; ++k) {
@@ -308,56 +305,44 @@ TEST(AuthorsRecords, PredictionMatchesTheirsExactly) {
   EXPECT_LT(worst, 1e-4);
 }
 
-TEST(AuthorsComparison, QuantilesInterpolate) {
+TEST(AuthorsComparison, QuantilesAreNearestRanks) {
   const auto q = quantiles({3.0, 1.0, 2.0, NAN, 4.0}, {0.0, 0.5, 1.0, 0.25});
   EXPECT_DOUBLE_EQ(q[0].value, 1.0);
-  EXPECT_DOUBLE_EQ(q[1].value, 2.5);
+  EXPECT_DOUBLE_EQ(q[1].value, 2.0);
   EXPECT_DOUBLE_EQ(q[2].value, 4.0);
-  EXPECT_DOUBLE_EQ(q[3].value, 1.75);
+  EXPECT_DOUBLE_EQ(q[3].value, 1.0);
   EXPECT_TRUE(std::isnan(quantiles({}, {0.5})[0].value));
 }
 
-// The full run of docs/authors_comparison.md. Writes
-// $LANECHANGE_AUTHORS_OUT/comparisons.jsonl, summary.json and summary.md
-// (default directory: authors_comparison in the working directory).
-// $LANECHANGE_AUTHORS_THREADS sets the threads (default 1),
-// $LANECHANGE_AUTHORS_TIME_LIMIT the seconds per plan (default 60) and
-// $LANECHANGE_AUTHORS_CONFIG a config JSON to use instead of the preset.
-TEST(AuthorsComparison, DISABLED_AllRecords) {
+// The study of `lanechange authors-study` on the first records: its three
+// files, one comparison a line, and a summary that counts them.
+TEST(AuthorsStudy, WritesEveryComparisonAndTheSummary) {
   REQUIRE_RECORDS();
-  const char* out_env = std::getenv("LANECHANGE_AUTHORS_OUT");
-  const std::filesystem::path out = out_env != nullptr ? out_env : "authors_comparison";
-  std::filesystem::create_directories(out);
-  AuthorsComparisonSettings settings;
-  if (const char* t = std::getenv("LANECHANGE_AUTHORS_THREADS")) settings.threads = std::atoi(t);
-  if (const char* t = std::getenv("LANECHANGE_AUTHORS_TIME_LIMIT")) {
-    settings.limits.time_limit_s = std::atof(t);
-  }
-  Config config = make_preset("authors");
-  if (const char* c = std::getenv("LANECHANGE_AUTHORS_CONFIG"); c != nullptr && *c != 0) {
-    config = load_config(c);
-  }
-  const auto start = std::chrono::steady_clock::now();
-  const auto results = compare_with_authors(all_records(), authors_planner(config), settings,
-                                            [](std::size_t done, std::size_t total) {
-                                              if (done % 50 == 0 || done == total)
-                                                std::fprintf(stderr, "%zu/%zu\n", done, total);
-                                            });
-  const double wall =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const auto dir = std::filesystem::temp_directory_path() / "lanechange_authors_study_test";
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
   {
-    std::ofstream lines(out / "comparisons.jsonl");
-    for (const AuthorsComparison& c : results) lines << nlohmann::json(c).dump() << "\n";
+    std::ifstream in(records_path());
+    std::ofstream few(dir / "few.jsonl");
+    std::string line;
+    for (int i = 0; i < 3 && std::getline(in, line); ++i) few << line << "\n";
   }
-  const AuthorsSummary summary = summarize(results, settings.tolerance);
-  nlohmann::json j = summary;
-  j["wall_s"] = wall;
-  j["threads"] = settings.threads;
-  std::ofstream(out / "summary.json") << j.dump(2) << "\n";
-  const std::string md = to_markdown(summary);
-  std::ofstream(out / "summary.md") << md;
-  std::cout << md << "Wall time " << wall << " s on " << settings.threads << " thread(s).\n";
+  AuthorsStudyOptions o;
+  o.records_path = (dir / "few.jsonl").string();
+  o.out_dir = (dir / "out").string();
+  const std::string md = run_authors_study(o);
+  std::ifstream lines(dir / "out" / "comparisons.jsonl");
+  int count = 0;
+  for (std::string line; std::getline(lines, line);) {
+    EXPECT_TRUE(nlohmann::json::parse(line).contains("agreement"));
+    ++count;
+  }
+  EXPECT_EQ(count, 3);
+  const auto summary = nlohmann::json::parse(std::ifstream(dir / "out" / "summary.json"));
+  EXPECT_EQ(summary.at("records").get<int>(), 3);
+  EXPECT_NE(md.find("Wall time"), std::string::npos);
+  std::filesystem::remove_all(dir);
 }
 
 }  // namespace
-}  // namespace lanechange::expert
+}  // namespace lanechange::studies
