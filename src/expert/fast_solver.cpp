@@ -12,6 +12,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <utility>
 
@@ -306,6 +307,9 @@ NodeOutcome solve_node_with(const LaneChangeQp& qp, const std::vector<int>& mode
   // The next node is most often a child or sibling of this one: start there.
   ws.start_controls = out.path.controls;
   out.objective = qp.objective(out.path);
+  // A rough point's objective may lie on either side of the optimum; only
+  // the dual bound is proven there.
+  out.lower_bound = out.coarse ? r.lower_bound + qp.objective_constant() : out.objective;
   return out;
 }
 
@@ -606,11 +610,214 @@ std::vector<int> rounded_modes(const LaneChangeQp& qp, const FastWorkspace& ws,
   return modes;
 }
 
+double least_open_bound(const std::vector<OpenNode>& open) {
+  double least = kInfinity;
+  for (const OpenNode& node : open) least = std::min(least, node.bound);
+  return least;
+}
+
+// Infeasibility that needs no QP, found in microseconds where the search
+// would solve its root first. True when the search must run (the workspace
+// is then ready for it); false when `out` holds the verdict.
+bool pre_check(const LaneChangeQp& qp, const SolveHints& hints, bool reachable_modes,
+               FastWorkspace& ws, LaneChangeSolution& out) {
+  // The initial state is given: some mode of node 0 must already hold.
+  if (!initial_state_allowed(qp)) {
+    out.status = MiqpStatus::Infeasible;
+    out.best_bound = kInfinity;
+    out.message = "the initial state breaks the lane rules";
+    return false;
+  }
+  prepare_round(qp, hints, ws, reachable_modes);
+  // Every feasible point lies in the reachable boxes and meets some mode at
+  // each node: a node where no mode can hold leaves none.
+  for (int k = 1; k <= qp.steps; ++k) {
+    if (!qp.node_modes[k].empty() && ws.possible_modes[k] == 0) {
+      out.status = MiqpStatus::Infeasible;
+      out.best_bound = kInfinity;
+      out.message = "no lane mode can hold at node ";
+      out.message += std::to_string(k);
+      out.qp_iterations = ws.iterations;
+      return false;
+    }
+  }
+  return true;
+}
+
+// The stages of one solve after the pre-check share the incumbent, the
+// clock and the solution they fill in; the open nodes live in the workspace,
+// whose memory outlasts the solve.
+class Search {
+ public:
+  Search(const LaneChangeQp& qp, const MiqpSettings& settings, FastWorkspace& ws,
+         Clock::time_point start, LaneChangeSolution& out)
+      : qp_(qp), settings_(settings), ws_(ws), start_(start), out_(out) {}
+
+  void find_incumbent(const NodeOutcome& root, const SolveHints& hints);
+  bool branch_and_bound(const std::vector<int>& root_modes, NodeOutcome root);
+  void finish();
+
+ private:
+  [[nodiscard]] double seconds_so_far() const {
+    return std::chrono::duration<double>(Clock::now() - start_).count();
+  }
+  [[nodiscard]] double prune_level() const { return prune_above(incumbent_, settings_); }
+  void accept(NodeOutcome& o);
+  bool stopped_at_limit(double pending_bound);
+  void explore(const std::vector<int>& modes, NodeOutcome o, double inherited_bound);
+  void push_children(const std::vector<int>& modes, int k, const State& relaxed, double bound);
+
+  const LaneChangeQp& qp_;
+  const MiqpSettings& settings_;
+  FastWorkspace& ws_;
+  Clock::time_point start_;
+  LaneChangeSolution& out_;
+  double incumbent_ = kInfinity;
+  bool numerical_trouble_ = false;
+};
+
+void Search::accept(NodeOutcome& o) {
+  if (o.objective < incumbent_) {
+    incumbent_ = o.objective;
+    out_.path = std::move(o.path);
+    out_.objective = incumbent_;
+  }
+}
+
+// The hinted modes, and the rounded root relaxation, each improved by moving
+// its lane switches: with an incumbent near the optimum from the start, the
+// search prunes most of its tree at once.
+void Search::find_incumbent(const NodeOutcome& root, const SolveHints& hints) {
+  // Nothing beats the root relaxation: once an incumbent is within the gap
+  // of it, the search is over (in later rounds the hint is usually there).
+  const double root_bound = root.objective;
+  // Out of time, the search returns at once: the heuristics must not run on
+  // past the limit either (a real-time step budget).
+  auto settled = [&] {
+    return root_bound >= prune_level() || seconds_so_far() > settings_.time_limit_s;
+  };
+  auto accept = [this](NodeOutcome& o) { this->accept(o); };
+  std::vector<std::pair<double, std::vector<int>>> starts;
+  std::vector<int> rounded = rounded_modes(qp_, ws_, root.path);
+  if (hints.modes != nullptr && static_cast<int>(hints.modes->size()) == qp_.steps + 1) {
+    starts.emplace_back(kInfinity, *hints.modes);
+  }
+  if (starts.empty() || rounded != starts.front().second) starts.emplace_back(kInfinity, rounded);
+  for (auto& [objective, modes] : starts) {
+    if (settled()) break;
+    if (!complete(qp_, modes) || !reachable(ws_, modes)) continue;
+    NodeOutcome o = solve_node(qp_, modes, ws_);
+    ++out_.nodes;
+    if (!o.feasible) continue;
+    objective = o.objective;
+    accept(o);
+  }
+  // The better start first: its switches are likely nearer the optimum.
+  std::sort(starts.begin(), starts.end(),
+            [](const auto& a, const auto& b) { return a.first < b.first; });
+  for (const auto& [objective, modes] : starts) {
+    if (!std::isfinite(objective) || settled()) continue;
+    improve_switches(qp_, modes, objective, ws_, out_.nodes, accept, settled);
+  }
+}
+
+// Depth first from the root, best child first. True when the search ran to
+// its end; false when a limit stopped it, with the solution filled in.
+bool Search::branch_and_bound(const std::vector<int>& root_modes, NodeOutcome root) {
+  ws_.stack.clear();
+  numerical_trouble_ = root.numerical_failure;
+  if (!root.feasible) return true;
+  // The root's QP is solved already, but the limits hold for it as for any
+  // node: the incumbent search may have used up the time.
+  if (stopped_at_limit(root.objective)) return false;
+  explore(root_modes, std::move(root), -kInfinity);
+  while (!ws_.stack.empty()) {
+    if (stopped_at_limit(kInfinity)) return false;
+    const OpenNode node = std::move(ws_.stack.back());
+    ws_.stack.pop_back();
+    NodeOutcome o =
+        solve_node(qp_, node.modes, ws_, prune_level(), NodePrecision::RoughBelowCutoff);
+    ++out_.nodes;
+    explore(node.modes, std::move(o), node.bound);
+  }
+  return true;
+}
+
+// False while the time and the nodes last. At a limit the solution takes the
+// incumbent and the least bound of the nodes left (`pending_bound` for one
+// not yet on the stack): no completion of theirs is cheaper.
+bool Search::stopped_at_limit(double pending_bound) {
+  const double elapsed = seconds_so_far();
+  const bool out_of_time = elapsed > settings_.time_limit_s;
+  if (!out_of_time && out_.nodes < settings_.node_limit) return false;
+  out_.status = out_of_time ? MiqpStatus::TimeLimit : MiqpStatus::NodeLimit;
+  out_.solve_ms = elapsed * 1000.0;
+  out_.qp_iterations = ws_.iterations;
+  if (out_.has_solution()) out_.modes = modes_of(qp_, out_.path);
+  out_.best_bound = std::min({out_.objective, pending_bound, least_open_bound(ws_.stack)});
+  return true;
+}
+
+// Prunes the node, takes its point as an incumbent when that meets some mode
+// at every node, or branches on it.
+void Search::explore(const std::vector<int>& modes, NodeOutcome o, double inherited_bound) {
+  numerical_trouble_ = numerical_trouble_ || o.numerical_failure;
+  if (!o.feasible || o.objective >= prune_level()) return;
+  int k = branching_node(qp_, ws_, modes, o.path, o.coarse ? kCoarseViolation : kModeTolerance);
+  if (k < 0 && o.coarse) {  // maybe a leaf: only a solution can tell
+    o = solve_node(qp_, modes, ws_, prune_level());
+    numerical_trouble_ = numerical_trouble_ || o.numerical_failure;
+    if (!o.feasible || o.objective >= prune_level()) return;
+    k = branching_node(qp_, ws_, modes, o.path, kModeTolerance);
+  }
+  if (k < 0) {
+    accept(o);
+    return;
+  }
+  // A child's QP has this one's rows and more: its optimum is no lower.
+  push_children(modes, k, o.path.states[k], std::max(inherited_bound, o.lower_bound));
+}
+
+// Children in order of how far the relaxed state is from each mode; the
+// nearest is pushed last so that it is explored first.
+void Search::push_children(const std::vector<int>& modes, int k, const State& relaxed,
+                           double bound) {
+  const auto& options = qp_.node_modes[k];
+  std::vector<std::pair<double, int>> order;
+  order.reserve(options.size());
+  for (int m = 0; m < static_cast<int>(options.size()); ++m) {
+    if (ws_.possible(k, m)) order.emplace_back(mode_violation(options[m], relaxed), m);
+  }
+  std::sort(order.begin(), order.end(), std::greater<>());
+  for (const auto& [violation, m] : order) {
+    std::vector<int> child = modes;
+    child[k] = m;
+    ws_.stack.push_back(OpenNode{std::move(child), bound});
+  }
+}
+
+// The search ran to its end: the incumbent is optimal, or no point exists.
+void Search::finish() {
+  out_.solve_ms = seconds_so_far() * 1000.0;
+  out_.qp_iterations = ws_.iterations;
+  if (out_.has_solution()) {
+    out_.status = MiqpStatus::Optimal;
+    out_.modes = modes_of(qp_, out_.path);
+    // Every node left behind was pruned within the gap of the incumbent.
+    out_.best_bound = out_.objective;
+    return;
+  }
+  out_.status = numerical_trouble_ ? MiqpStatus::NumericalError : MiqpStatus::Infeasible;
+  out_.message = numerical_trouble_ ? "a QP relaxation failed" : "no lane sequence is feasible";
+  // A failed relaxation proves nothing about its subtree.
+  out_.best_bound = numerical_trouble_ ? -kInfinity : kInfinity;
+}
+
 }  // namespace
 
 }  // namespace detail
 
-using namespace detail;  // NOLINT(google-build-using-namespace): this file's own helpers
+using namespace detail;  // NOLINT(google-build-using-namespace): this file's own functions
 
 std::unique_ptr<LaneChangeWorkspace> FastLaneChangeSolver::make_workspace() const {
   return std::make_unique<FastWorkspace>();
@@ -619,143 +826,18 @@ std::unique_ptr<LaneChangeWorkspace> FastLaneChangeSolver::make_workspace() cons
 LaneChangeSolution FastLaneChangeSolver::solve(const LaneChangeQp& qp, const MiqpSettings& settings,
                                                const SolveHints& hints) const {
   const auto start = Clock::now();
-  const auto seconds_so_far = [start] {
-    return std::chrono::duration<double>(Clock::now() - start).count();
-  };
   std::unique_ptr<LaneChangeWorkspace> owned;
-  FastWorkspace* ws = &workspace_for(hints, owned);
+  FastWorkspace& ws = workspace_for(hints, owned);
   LaneChangeSolution out;
-  ws->iterations = 0;
-  const int n = qp.steps;
-  // The initial state is given: some mode of node 0 must already hold.
-  if (!initial_state_allowed(qp)) {
-    out.status = MiqpStatus::Infeasible;
-    out.message = "the initial state breaks the lane rules";
-    return out;
-  }
-  prepare_round(qp, hints, *ws, options_.reachable_modes);
-  // Every feasible point lies in the reachable boxes and meets some mode at
-  // each node: a node where no mode can hold leaves none.
-  for (int k = 1; k <= n; ++k) {
-    if (!qp.node_modes[k].empty() && ws->possible_modes[k] == 0) {
-      out.status = MiqpStatus::Infeasible;
-      out.message = "no lane mode can hold at node ";
-      out.message += std::to_string(k);
-      out.qp_iterations = ws->iterations;
-      return out;
-    }
-  }
-  double incumbent = kInfinity;
-  auto accept = [&](NodeOutcome& o) {
-    if (o.objective < incumbent) {
-      incumbent = o.objective;
-      out.path = std::move(o.path);
-      out.objective = incumbent;
-    }
-  };
-  bool numerical_trouble = false;
-  // Incumbents first: the hinted modes, and the rounded root relaxation, each
-  // improved by moving its lane switches.
-  std::vector<int> root_modes(n + 1, kFree);
-  NodeOutcome root = solve_node(qp, root_modes, *ws);
+  ws.iterations = 0;
+  if (!pre_check(qp, hints, options_.reachable_modes, ws, out)) return out;
+  const std::vector<int> root_modes(qp.steps + 1, kFree);
+  NodeOutcome root = solve_node(qp, root_modes, ws);
   ++out.nodes;
-  if (root.feasible) {
-    // Nothing beats the root relaxation: once an incumbent is within the gap
-    // of it, the search is over (in later rounds the hint is usually there).
-    const double root_bound = root.objective;
-    // Out of time, the search below returns at once: the heuristics must not
-    // run on past the limit either (a real-time step budget).
-    auto settled = [&] {
-      return root_bound >= prune_above(incumbent, settings) ||
-             seconds_so_far() > settings.time_limit_s;
-    };
-    std::vector<std::pair<double, std::vector<int>>> starts;
-    std::vector<int> rounded = rounded_modes(qp, *ws, root.path);
-    if (hints.modes != nullptr && static_cast<int>(hints.modes->size()) == n + 1) {
-      starts.emplace_back(kInfinity, *hints.modes);
-    }
-    if (starts.empty() || rounded != starts.front().second) starts.emplace_back(kInfinity, rounded);
-    for (auto& [objective, modes] : starts) {
-      if (settled()) break;
-      if (!complete(qp, modes) || !reachable(*ws, modes)) continue;
-      NodeOutcome o = solve_node(qp, modes, *ws);
-      ++out.nodes;
-      if (!o.feasible) continue;
-      objective = o.objective;
-      accept(o);
-    }
-    // The better start first: its switches are likely nearer the optimum.
-    std::sort(starts.begin(), starts.end(),
-              [](const auto& a, const auto& b) { return a.first < b.first; });
-    for (const auto& [objective, modes] : starts) {
-      if (!std::isfinite(objective) || settled()) continue;
-      improve_switches(qp, modes, objective, *ws, out.nodes, accept, settled);
-    }
-  }
+  Search search(qp, settings, ws, start, out);
+  if (root.feasible) search.find_incumbent(root, hints);
   out.incumbent_qps = out.nodes;
-  ws->stack.clear();
-  numerical_trouble = root.numerical_failure;
-  bool root_pending = root.feasible;
-  while (root_pending || !ws->stack.empty()) {
-    const double elapsed = seconds_so_far();
-    if (elapsed > settings.time_limit_s || out.nodes >= settings.node_limit) {
-      out.status = elapsed > settings.time_limit_s ? MiqpStatus::TimeLimit : MiqpStatus::NodeLimit;
-      out.solve_ms = elapsed * 1000.0;
-      out.qp_iterations = ws->iterations;
-      if (out.has_solution()) out.modes = modes_of(qp, out.path);
-      return out;
-    }
-    std::vector<int> modes;
-    NodeOutcome o;
-    if (root_pending) {
-      modes = root_modes;
-      o = std::exchange(root, NodeOutcome{});
-      root_pending = false;
-    } else {
-      modes = std::move(ws->stack.back());
-      ws->stack.pop_back();
-      o = solve_node(qp, modes, *ws, prune_above(incumbent, settings),
-                     NodePrecision::RoughBelowCutoff);
-      ++out.nodes;
-    }
-    numerical_trouble = numerical_trouble || o.numerical_failure;
-    if (!o.feasible) continue;
-    if (o.objective >= prune_above(incumbent, settings)) continue;
-    int k = branching_node(qp, *ws, modes, o.path, o.coarse ? kCoarseViolation : kModeTolerance);
-    if (k < 0 && o.coarse) {  // maybe a leaf: only a solution can tell
-      o = solve_node(qp, modes, *ws, prune_above(incumbent, settings));
-      numerical_trouble = numerical_trouble || o.numerical_failure;
-      if (!o.feasible || o.objective >= prune_above(incumbent, settings)) continue;
-      k = branching_node(qp, *ws, modes, o.path, kModeTolerance);
-    }
-    if (k < 0) {
-      accept(o);
-      continue;
-    }
-    // Children in order of how far the relaxed state is from each mode; the
-    // nearest is pushed last so that it is explored first.
-    const auto& options = qp.node_modes[k];
-    std::vector<std::pair<double, int>> order;
-    order.reserve(options.size());
-    for (int m = 0; m < static_cast<int>(options.size()); ++m) {
-      if (ws->possible(k, m)) order.emplace_back(mode_violation(options[m], o.path.states[k]), m);
-    }
-    std::sort(order.begin(), order.end(), std::greater<>());
-    for (const auto& [violation, m] : order) {
-      std::vector<int> child = modes;
-      child[k] = m;
-      ws->stack.push_back(std::move(child));
-    }
-  }
-  out.solve_ms = seconds_so_far() * 1000.0;
-  out.qp_iterations = ws->iterations;
-  if (out.has_solution()) {
-    out.status = MiqpStatus::Optimal;
-    out.modes = modes_of(qp, out.path);
-  } else {
-    out.status = numerical_trouble ? MiqpStatus::NumericalError : MiqpStatus::Infeasible;
-    out.message = numerical_trouble ? "a QP relaxation failed" : "no lane sequence is feasible";
-  }
+  if (search.branch_and_bound(root_modes, std::move(root))) search.finish();
   return out;
 }
 

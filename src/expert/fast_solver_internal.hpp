@@ -15,11 +15,18 @@ inline constexpr double kModeTolerance = 1e-6;  ///< m: a lane row may be this f
 /// `modes_can_hold`: far above the QP's own tolerance, far below a lane.
 inline constexpr double kBoxMargin = 1e-5;
 
+/// A node of the search waiting to be solved: its lane modes, and a lower
+/// bound on its optimum that its parent proved (a child's QP only adds rows).
+struct OpenNode {
+  std::vector<int> modes;
+  double bound = -kInfinity;
+};
+
 struct FastWorkspace final : LaneChangeWorkspace {
   StructuredQp base;  // dynamics, costs and bounds of the round
   StructuredQp node;  // the base plus the lane rows of one search node
   QpWorkspace qp_workspace;
-  std::vector<std::vector<int>> stack;  // mode assignments waiting to be solved
+  std::vector<OpenNode> stack;  // waiting to be solved
   std::vector<Control> start_controls;
   long iterations = 0;         // of the interior-point method, for the solution's statistics
   unsigned needed_bounds = 0;  // state components whose bounds this round's QPs carry
@@ -44,6 +51,9 @@ struct NodeOutcome {
   bool cut_off = false;  // its lower bound passed the cutoff: objective holds that bound
   int iterations = 0;
   double objective = kInfinity;
+  /// Proven for the node's QP: its objective once solved exactly; for a
+  /// coarse point, the dual bound seen on the way (-infinity if none).
+  double lower_bound = -kInfinity;
   Iterate path;
 };
 

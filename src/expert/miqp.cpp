@@ -131,6 +131,12 @@ std::string MiqpProblem::check() const {
   return check_values(*this);
 }
 
+double relative_gap(double objective, double best_bound) {
+  if (objective == best_bound) return 0.0;
+  if (!std::isfinite(objective) || !std::isfinite(best_bound)) return kInfinity;
+  return (objective - best_bound) / std::max(1.0, std::abs(objective));
+}
+
 std::string_view to_string(MiqpStatus status) {
   switch (status) {
     case MiqpStatus::Optimal: return "Optimal";

@@ -12,6 +12,7 @@ LaneChangeSolution ReferenceLaneChangeSolver::solve(const LaneChangeQp& qp,
   const MiqpResult result = BonminSolver(BonminAlgorithm::BranchAndBound).solve(problem, settings);
   LaneChangeSolution out;
   out.status = result.status;
+  out.best_bound = result.best_bound;
   out.nodes = result.nodes;
   out.solve_ms = result.solve_ms;
   out.message = result.message;

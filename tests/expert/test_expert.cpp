@@ -267,6 +267,16 @@ LaneChangeQp small_first_round_problem(LaneRule rule, int index) {
          << to_string(c.reference_status) << " " << c.reference_objective;
 }
 
+// The reference passes on Bonmin's proven bound: at its optimum, within
+// Bonmin's gap tolerances of the objective.
+TEST(ReferenceSolver, ReportsBonminsBound) {
+  const LaneChangeSolution s =
+      ReferenceLaneChangeSolver{}.solve(small_first_round_problem(LaneRule::EitherOr, 0), {});
+  ASSERT_EQ(s.status, MiqpStatus::Optimal) << s.message;
+  EXPECT_LE(s.best_bound, s.objective + 1e-6 * std::max(1.0, std::abs(s.objective)));
+  EXPECT_LE(std::abs(relative_gap(s.objective, s.best_bound)), 1e-6);
+}
+
 TEST_P(CrossCheck, FastSolverMatchesTheReference) {
   const auto [rule, index] = GetParam();
   EXPECT_TRUE(fast_agrees_with_reference(small_first_round_problem(rule, index)));
@@ -589,6 +599,63 @@ TEST(FastSolver, OutOfTimeTheIncumbentSearchDoesNotStart) {
   EXPECT_EQ(cut.status, MiqpStatus::TimeLimit);
   EXPECT_EQ(cut.nodes, 1);
   EXPECT_FALSE(cut.has_solution());
+  // The root relaxation, solved before the limit struck, still bounds the optimum.
+  EXPECT_GT(cut.best_bound, -kInfinity);
+  EXPECT_LE(cut.best_bound, full.objective + 1e-6 * (1.0 + std::abs(full.objective)));
+}
+
+// A search that runs to its end proves its optimum to within the gap
+// tolerances, and an infeasible round to be infeasible.
+TEST(FastSolver, ACompletedSearchProvesItsBound) {
+  const Config config;
+  const ScenarioSampler sampler(config, 29);
+  const MiqpSettings settings;
+  int optimal = 0;
+  for (std::uint64_t i = 0; i < 8; ++i) {
+    const LaneChangeQp qp = first_round_problem(sampler.sample(i), config);
+    const LaneChangeSolution s = FastLaneChangeSolver{}.solve(qp, settings);
+    if (s.status == MiqpStatus::Infeasible) {
+      EXPECT_EQ(s.best_bound, kInfinity) << "scenario " << i;
+      continue;
+    }
+    ASSERT_EQ(s.status, MiqpStatus::Optimal) << "scenario " << i << ": " << s.message;
+    ++optimal;
+    EXPECT_LE(s.best_bound, s.objective) << "scenario " << i;
+    EXPECT_LE(s.objective - s.best_bound,
+              std::max(settings.absolute_gap, settings.relative_gap * std::abs(s.objective)))
+        << "scenario " << i;
+    EXPECT_LE(relative_gap(s.objective, s.best_bound), settings.relative_gap) << "scenario " << i;
+  }
+  EXPECT_GT(optimal, 0);
+}
+
+// Stopped by its node limit after branching at the root, the search keeps
+// its incumbent, and its bound comes from the nodes left open: below the
+// incumbent (they were not pruned), yet no higher than the optimum.
+TEST(FastSolver, ANodeLimitLeavesTheOpenNodesBound) {
+  const Config config;
+  const ScenarioSampler sampler(config, 29);
+  int with_incumbent = 0;
+  for (std::uint64_t i = 0; i < 40 && with_incumbent < 3; ++i) {
+    const LaneChangeQp qp = first_round_problem(sampler.sample(i), config);
+    const LaneChangeSolution full = FastLaneChangeSolver{}.solve(qp, {});
+    // Only a search that solves nodes after its incumbent search can leave some open.
+    if (full.status != MiqpStatus::Optimal || full.nodes < full.incumbent_qps + 2) continue;
+    MiqpSettings tight;
+    tight.node_limit = full.incumbent_qps + 1;
+    const LaneChangeSolution cut = FastLaneChangeSolver{}.solve(qp, tight);
+    EXPECT_EQ(cut.status, MiqpStatus::NodeLimit) << "scenario " << i;
+    EXPECT_EQ(cut.nodes, tight.node_limit) << "scenario " << i;
+    EXPECT_GT(cut.best_bound, -kInfinity) << "scenario " << i;
+    EXPECT_LE(cut.best_bound, full.objective + 1e-6 * (1.0 + std::abs(full.objective)))
+        << "scenario " << i;
+    if (!cut.has_solution()) continue;
+    ++with_incumbent;
+    EXPECT_LT(cut.best_bound, cut.objective) << "scenario " << i;
+    EXPECT_GT(relative_gap(cut.objective, cut.best_bound), 0.0) << "scenario " << i;
+    EXPECT_GE(cut.objective, full.objective - 1e-6 * (1.0 + std::abs(full.objective)));
+  }
+  EXPECT_GT(with_incumbent, 0);
 }
 
 TEST(Planner, NoGapIsAFailure) {

@@ -17,6 +17,13 @@ struct LaneChangeSolution {
   Iterate path;            ///< empty unless a point was found
   std::vector<int> modes;  ///< the lane mode chosen at each node (-1 where none applies)
   double objective = kInfinity;
+  /// Proven lower bound on the optimum, as MiqpResult::best_bound (see
+  /// relative_gap): -infinity where none is known, +infinity when
+  /// Infeasible, the objective when a search ends Optimal (it proved nothing
+  /// cheaper by more than its gap tolerances), and the least bound of its
+  /// open nodes when a limit stopped it. The fixed-mode back-end searches
+  /// nothing and leaves it -infinity.
+  double best_bound = -kInfinity;
   long nodes = 0;          ///< QPs (ours) or tree nodes (Bonmin) solved
   long qp_iterations = 0;  ///< interior-point iterations over all QPs (ours)
   long incumbent_qps = 0;  ///< QPs spent finding a first solution before the search (ours)

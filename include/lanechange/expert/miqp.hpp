@@ -82,6 +82,12 @@ struct MiqpResult {
   [[nodiscard]] bool has_solution() const { return x.size() > 0; }
 };
 
+/// How far a best point's objective may lie above the optimum, relative to
+/// the objective (at least 1, as the cross-check compares objectives): 0
+/// where they meet (an Optimal exact search; Infeasible, both +infinity),
+/// +infinity where either is unknown, below 0 only by rounding.
+[[nodiscard]] double relative_gap(double objective, double best_bound);
+
 /// A back-end. Implementations are stateless across calls, so one instance may
 /// solve many problems on many threads at once.
 class MiqpSolver {
