@@ -89,8 +89,12 @@ void add_evaluate(CLI::App& app, const ConfigSource& config) {
       "evaluate", "Closed-loop rollouts of sampled scenarios for one or more planners (resumable)");
   auto a = make_args<EvaluateArgs>();
   sim::EvaluateOptions& o = a->options;
-  cmd->add_option("--count", o.count, "How many sampled scenarios")->required();
-  cmd->add_option("--seed", o.seed, "Sampler seed")->required();
+  auto* count = cmd->add_option("--count", o.count, "How many sampled scenarios");
+  auto* seed = cmd->add_option("--seed", o.seed, "Sampler seed");
+  auto* scenes = cmd->add_option("--scenarios", o.scenarios_dir,
+                                 "Roll out every scene file (*.json) of this folder instead of "
+                                 "sampled scenes (scenes.csv names each index's file)");
+  scenes->excludes(count)->excludes(seed);
   add_behavior_option(*cmd, a->behavior);
   add_planner_option(*cmd, a->planners, "Planners, comma-separated");
   cmd->add_option("--model", o.model_dir,
@@ -100,7 +104,12 @@ void add_evaluate(CLI::App& app, const ConfigSource& config) {
       ->check(CLI::NonNegativeNumber);
   cmd->add_option("--shard-size", o.shard_size, "Scenarios per shard file");
   cmd->add_option("--duration", o.duration, "Seconds per rollout (default: horizon + settle)");
-  cmd->callback([a, config] { evaluate_all(*a, config()); });
+  cmd->callback([a, config, count, seed, scenes] {
+    if (scenes->count() == 0 && (count->count() == 0 || seed->count() == 0)) {
+      throw InputError("--count", "evaluate needs --count N and --seed S, or --scenarios DIR");
+    }
+    evaluate_all(*a, config());
+  });
 }
 
 }  // namespace lanechange::app

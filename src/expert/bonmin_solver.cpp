@@ -34,9 +34,6 @@ namespace {
 using Clock = std::chrono::steady_clock;
 using coin::milliseconds_since;
 using coin::set_option;
-using coin::SparseTriplets;
-using coin::triplets_of;
-using coin::write_triplets;
 using Ipopt::Index;
 using Ipopt::Number;
 
@@ -73,26 +70,15 @@ bool rows_cross(const MiqpProblem& problem) {
   return (problem.row_lower.array() > problem.row_upper.array()).any();
 }
 
-class MiqpTminlp final : public Bonmin::TMINLP {
+class MiqpTminlp final : public coin::LinearRowsNlp<Bonmin::TMINLP> {
  public:
   MiqpTminlp(const MiqpProblem& problem, ColumnBounds bounds)
-      : problem_(problem),
+      : LinearRowsNlp(problem.hessian, problem.constraints),
+        problem_(problem),
         bounds_(std::move(bounds)),
-        hessian_lower_(triplets_of(problem.hessian, true)),
-        jacobian_(triplets_of(problem.constraints, false)),
         rows_(problem.constraints) {}
 
   [[nodiscard]] SolverReturn final_status() const { return final_status_; }
-
-  bool get_nlp_info(Index& n, Index& m, Index& nnz_jac_g, Index& nnz_h_lag,
-                    Ipopt::TNLP::IndexStyleEnum& index_style) override {
-    n = problem_.num_variables();
-    m = problem_.num_rows();
-    nnz_jac_g = jacobian_.size();
-    nnz_h_lag = hessian_lower_.size();
-    index_style = Ipopt::TNLP::C_STYLE;
-    return true;
-  }
 
   bool get_variables_types(Index n, VariableType* var_types) override {
     for (Index j = 0; j < n; ++j) {
@@ -104,10 +90,10 @@ class MiqpTminlp final : public Bonmin::TMINLP {
 
   bool get_variables_linearity(Index n, Ipopt::TNLP::LinearityType* var_types) override {
     std::fill_n(var_types, n, Ipopt::TNLP::LINEAR);
-    for (Index e = 0; e < hessian_lower_.size(); ++e) {
-      if (hessian_lower_.values[e] == 0.0) continue;
-      var_types[hessian_lower_.rows[e]] = Ipopt::TNLP::NON_LINEAR;
-      var_types[hessian_lower_.cols[e]] = Ipopt::TNLP::NON_LINEAR;
+    for (Index e = 0; e < hessian_lower().size(); ++e) {
+      if (hessian_lower().values[e] == 0.0) continue;
+      var_types[hessian_lower().rows[e]] = Ipopt::TNLP::NON_LINEAR;
+      var_types[hessian_lower().cols[e]] = Ipopt::TNLP::NON_LINEAR;
     }
     return true;
   }
@@ -117,42 +103,9 @@ class MiqpTminlp final : public Bonmin::TMINLP {
     return true;
   }
 
-  bool get_bounds_info(Index n, Number* x_l, Number* x_u, Index m, Number* g_l,
-                       Number* g_u) override {
-    callbacks().bounds(n, x_l, x_u, m, g_l, g_u);
-    return true;
-  }
-
-  bool get_starting_point(Index n, bool init_x, Number* x, bool init_z, Number* z_l, Number* z_u,
-                          Index m, bool init_lambda, Number* lambda) override {
-    callbacks().starting_point(n, init_x, x, init_z, z_l, z_u, m, init_lambda, lambda);
-    return true;
-  }
-
   bool eval_f(Index n, const Number* x, bool, Number& obj_value) override {
     obj_value = problem_.objective(Eigen::Map<const Eigen::VectorXd>(x, n));
     return true;
-  }
-
-  bool eval_grad_f(Index n, const Number* x, bool, Number* grad_f) override {
-    callbacks().objective_gradient(n, x, grad_f);
-    return true;
-  }
-
-  bool eval_g(Index n, const Number* x, bool, Index m, Number* g) override {
-    callbacks().rows(n, x, m, g);
-    return true;
-  }
-
-  bool eval_jac_g(Index, const Number*, bool, Index, Index, Index* i_row, Index* j_col,
-                  Number* values) override {
-    return write_triplets(jacobian_, 1.0, i_row, j_col, values);
-  }
-
-  // The constraints are linear, so the Lagrangian's Hessian is the objective's.
-  bool eval_h(Index, const Number*, bool, Number obj_factor, Index, const Number*, bool, Index,
-              Index* i_row, Index* j_col, Number* values) override {
-    return write_triplets(hessian_lower_, obj_factor, i_row, j_col, values);
   }
 
   // Used by outer approximation to linearise one row at a time.
@@ -179,22 +132,20 @@ class MiqpTminlp final : public Bonmin::TMINLP {
   [[nodiscard]] const SosInfo* sosConstraints() const override { return nullptr; }
 
   bool hasLinearObjective() override {
-    return std::all_of(hessian_lower_.values.begin(), hessian_lower_.values.end(),
+    return std::all_of(hessian_lower().values.begin(), hessian_lower().values.end(),
                        [](double value) { return value == 0.0; });
   }
 
  private:
   using RowMajorMatrix = Eigen::SparseMatrix<double, Eigen::RowMajor>;
 
-  [[nodiscard]] coin::LinearRowsQp callbacks() const {
+  [[nodiscard]] coin::LinearRowsQp qp() const override {
     return {problem_.hessian, problem_.gradient,  problem_.constraints, bounds_.lower,
             bounds_.upper,    problem_.row_lower, problem_.row_upper};
   }
 
   const MiqpProblem& problem_;
   ColumnBounds bounds_;
-  SparseTriplets hessian_lower_;
-  SparseTriplets jacobian_;
   RowMajorMatrix rows_;
   SolverReturn final_status_ = MINLP_ERROR;
 };
@@ -388,7 +339,7 @@ Eigen::SparseMatrix<double> hessian_block(const MiqpProblem& problem, bool binar
     if (!binaries_fixed || problem.kinds[j] == VariableKind::Continuous) block_index[j] = size++;
   }
   std::vector<Eigen::Triplet<double>> entries;
-  const SparseTriplets all = triplets_of(problem.hessian, false);
+  const coin::SparseTriplets all = coin::triplets_of(problem.hessian, false);
   for (Index e = 0; e < all.size(); ++e) {
     const int row = block_index[static_cast<std::size_t>(all.rows[e])];
     const int col = block_index[static_cast<std::size_t>(all.cols[e])];

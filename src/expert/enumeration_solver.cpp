@@ -27,7 +27,6 @@ using coin::milliseconds_since;
 using coin::set_option;
 using coin::SparseTriplets;
 using coin::triplets_of;
-using coin::write_triplets;
 using Ipopt::Index;
 using Ipopt::Number;
 
@@ -193,61 +192,17 @@ bool linear_rows_feasible(const ReducedQp& qp, double tolerance) {
   return !lp.isProvenPrimalInfeasible();
 }
 
-class ReducedQpTnlp final : public Ipopt::TNLP {
+class ReducedQpTnlp final : public coin::LinearRowsNlp<Ipopt::TNLP> {
  public:
   explicit ReducedQpTnlp(const ReducedQp& qp)
-      : qp_(qp),
-        hessian_lower_(triplets_of(qp.hessian, true)),
-        jacobian_(triplets_of(qp.constraints, false)) {}
+      : LinearRowsNlp(qp.hessian, qp.constraints), qp_(qp) {}
 
   [[nodiscard]] const Eigen::VectorXd& solution() const { return solution_; }
-
-  bool get_nlp_info(Index& n, Index& m, Index& nnz_jac_g, Index& nnz_h_lag,
-                    IndexStyleEnum& index_style) override {
-    n = static_cast<Index>(qp_.gradient.size());
-    m = static_cast<Index>(qp_.row_lower.size());
-    nnz_jac_g = jacobian_.size();
-    nnz_h_lag = hessian_lower_.size();
-    index_style = C_STYLE;
-    return true;
-  }
-
-  bool get_bounds_info(Index n, Number* x_l, Number* x_u, Index m, Number* g_l,
-                       Number* g_u) override {
-    callbacks().bounds(n, x_l, x_u, m, g_l, g_u);
-    return true;
-  }
-
-  bool get_starting_point(Index n, bool init_x, Number* x, bool init_z, Number* z_l, Number* z_u,
-                          Index m, bool init_lambda, Number* lambda) override {
-    callbacks().starting_point(n, init_x, x, init_z, z_l, z_u, m, init_lambda, lambda);
-    return true;
-  }
 
   bool eval_f(Index n, const Number* x, bool, Number& obj_value) override {
     const Eigen::Map<const Eigen::VectorXd> point(x, n);
     obj_value = 0.5 * point.dot(qp_.hessian * point) + qp_.gradient.dot(point);
     return true;
-  }
-
-  bool eval_grad_f(Index n, const Number* x, bool, Number* grad_f) override {
-    callbacks().objective_gradient(n, x, grad_f);
-    return true;
-  }
-
-  bool eval_g(Index n, const Number* x, bool, Index m, Number* g) override {
-    callbacks().rows(n, x, m, g);
-    return true;
-  }
-
-  bool eval_jac_g(Index, const Number*, bool, Index, Index, Index* i_row, Index* j_col,
-                  Number* values) override {
-    return write_triplets(jacobian_, 1.0, i_row, j_col, values);
-  }
-
-  bool eval_h(Index, const Number*, bool, Number obj_factor, Index, const Number*, bool, Index,
-              Index* i_row, Index* j_col, Number* values) override {
-    return write_triplets(hessian_lower_, obj_factor, i_row, j_col, values);
   }
 
   void finalize_solution(Ipopt::SolverReturn, Index n, const Number* x, const Number*,
@@ -257,14 +212,12 @@ class ReducedQpTnlp final : public Ipopt::TNLP {
   }
 
  private:
-  [[nodiscard]] coin::LinearRowsQp callbacks() const {
+  [[nodiscard]] coin::LinearRowsQp qp() const override {
     return {qp_.hessian,   qp_.gradient,  qp_.constraints, qp_.col_lower,
             qp_.col_upper, qp_.row_lower, qp_.row_upper};
   }
 
   const ReducedQp& qp_;
-  SparseTriplets hessian_lower_;
-  SparseTriplets jacobian_;
   Eigen::VectorXd solution_;
 };
 

@@ -5,6 +5,7 @@
 #include "lanechange/learn/classifier.hpp"
 #include "lanechange/learn/learn_data.hpp"
 #include "lanechange/plot.hpp"
+#include "lanechange/run/markdown.hpp"
 #include "learn/outputs.hpp"
 
 namespace lanechange::learn::detail {
@@ -29,9 +30,10 @@ std::string spaced(std::string_view name) {
 }
 
 void classifier_rows(const json& set, std::ostringstream& md) {
-  md << "| classifier | test accuracy | CV accuracy (mean +- sd) | macro F1 | precision (wp/ip/f) "
-        "| recall (wp/ip/f) | train s | predict us/scene | hyperparameters |\n"
-     << "|---|---|---|---|---|---|---|---|---|\n";
+  run::Table table{
+      {"classifier", "test accuracy", "CV accuracy (mean +- sd)", "macro F1", "precision (wp/ip/f)",
+       "recall (wp/ip/f)", "train s", "predict us/scene", "hyperparameters"},
+      {}};
   for (ClassifierKind kind : kClassifierKinds) {
     const std::string name(classifier_name(kind));
     if (!set.contains(name)) continue;
@@ -44,29 +46,30 @@ void classifier_rows(const json& set, std::ostringstream& md) {
       }
       return out;
     };
-    md << "| " << name << " | " << percent(c.at("test_accuracy")) << "% | "
-       << percent(c.at("cv_accuracy_mean")) << "% +- " << percent(c.at("cv_accuracy_sd")) << " | "
-       << fixed(c.at("macro_f1").get<double>(), 3) << " | " << triple("precision") << " | "
-       << triple("recall") << " | " << fixed(c.at("train_s").get<double>(), 2) << " | "
-       << fixed(c.at("predict_us_per_scene").get<double>(), 1) << " | "
-       << c.at("hyperparameters").dump() << " |\n";
+    table.rows.push_back(
+        {name, percent(c.at("test_accuracy")) + "%",
+         percent(c.at("cv_accuracy_mean")) + "% +- " + percent(c.at("cv_accuracy_sd")),
+         fixed(c.at("macro_f1").get<double>(), 3), triple("precision"), triple("recall"),
+         fixed(c.at("train_s").get<double>(), 2),
+         fixed(c.at("predict_us_per_scene").get<double>(), 1), c.at("hyperparameters").dump()});
   }
+  md << run::markdown(table);
 }
 
 void behavior_rows(const json& set, std::ostringstream& md) {
-  md << "| classifier |";
-  for (std::string_view b : kBehaviorNames) md << " " << b << " |";
-  md << "\n|---|---|---|---|\n";
+  run::Table table{{"classifier"}, {}};
+  for (std::string_view b : kBehaviorNames) table.header.emplace_back(b);
   for (ClassifierKind kind : kClassifierKinds) {
     const std::string name(classifier_name(kind));
     if (!set.contains(name)) continue;
-    md << "| " << name << " |";
+    std::vector<std::string> row = {name};
     for (std::string_view b : kBehaviorNames) {
       const json& by = set.at(name).at("accuracy_by_behavior");
-      md << " " << (by.contains(b) ? percent(by.at(b)) + "%" : std::string("-")) << " |";
+      row.push_back(by.contains(b) ? percent(by.at(b)) + "%" : std::string("-"));
     }
-    md << "\n";
+    table.rows.push_back(std::move(row));
   }
+  md << run::markdown(table);
 }
 
 }  // namespace
@@ -167,12 +170,12 @@ std::string report_markdown(const json& m) {
   md << "\n### Test accuracy by behavior\n\n";
   behavior_rows(m.at("classifiers_with_behavior"), md);
   const json& n = m.at("network");
-  md << "\n## Action network\n\n"
-     << "| output | test RMSE | test p95 abs error |\n|---|---|---|\n";
+  run::Table outputs{{"output", "test RMSE", "test p95 abs error"}, {}};
   for (const auto& [name, rmse] : n.at("test_rmse").items()) {
-    md << "| " << name << " | " << fixed(rmse.get<double>(), 4) << " | "
-       << fixed(n.at("test_p95_abs_error").at(name).get<double>(), 4) << " |\n";
+    outputs.rows.push_back({name, fixed(rmse.get<double>(), 4),
+                            fixed(n.at("test_p95_abs_error").at(name).get<double>(), 4)});
   }
+  md << "\n## Action network\n\n" << run::markdown(outputs);
   md << "\nEpochs " << n.at("epochs") << " (best " << n.at("best_epoch") << "), "
      << fixed(n.at("train_s").get<double>(), 1) << " s ("
      << fixed(n.at("s_per_epoch").get<double>(), 3)

@@ -18,6 +18,7 @@
 #include "lanechange/run/progress.hpp"
 #include "lanechange/sampler.hpp"
 #include "lanechange/sim/simulator.hpp"
+#include "run/checksum.hpp"
 #include "run/csv.hpp"
 #include "sim/evaluation_files.hpp"
 
@@ -31,7 +32,54 @@ namespace {
 constexpr std::string_view kEvaluationFormat = "lanechange.evaluation/3";
 constexpr const char* kManifest = "evaluation.json";
 
-json parameters_of(const EvaluateOptions& o) {
+// The scene files of a folder, in the order of their names, each loaded
+// (and so checked) before anything is written.
+struct SceneFiles {
+  std::vector<std::string> names;
+  std::vector<Scenario> scenes;
+};
+
+SceneFiles load_scene_files(const EvaluateOptions& o) {
+  SceneFiles files;
+  if (o.scenarios_dir.empty()) return files;
+  if (!fs::is_directory(o.scenarios_dir)) {
+    throw InputError("--scenarios", o.scenarios_dir + " is not a directory");
+  }
+  for (const auto& entry : fs::directory_iterator(o.scenarios_dir)) {
+    if (entry.is_regular_file() && entry.path().extension() == ".json") {
+      files.names.push_back(entry.path().filename().string());
+    }
+  }
+  if (files.names.empty()) {
+    throw InputError("--scenarios", o.scenarios_dir + " holds no scene file (*.json)");
+  }
+  std::sort(files.names.begin(), files.names.end());
+  for (const std::string& name : files.names) {
+    files.scenes.push_back(load_scenario((fs::path(o.scenarios_dir) / name).string(), o.config));
+  }
+  return files;
+}
+
+// A resume must roll out the very same files: their names and checksums are
+// part of the parameters.
+json scene_files_block(const EvaluateOptions& o, const SceneFiles& files) {
+  json block = json::array();
+  for (const std::string& name : files.names) {
+    block.push_back(
+        {{"file", name}, {"crc32", run::file_crc32((fs::path(o.scenarios_dir) / name).string())}});
+  }
+  return block;
+}
+
+json parameters_of(const EvaluateOptions& o, const SceneFiles& files) {
+  if (!files.names.empty()) {
+    return {{"scenarios", scene_files_block(o, files)},
+            {"planners", o.planners},
+            {"model", o.model_dir},
+            {"shard_size", o.shard_size},
+            {"duration", o.duration},
+            {"config", o.config}};
+  }
   return {{"count", o.count},
           {"seed", o.seed},
           {"behavior", o.behavior ? std::string(to_string(*o.behavior)) : "all"},
@@ -46,7 +94,12 @@ void validate(const EvaluateOptions& o) {
   auto require = [](bool ok, const char* field, const std::string& problem) {
     if (!ok) throw InputError(field, problem);
   };
-  require(o.count >= 1 && o.count <= 100'000'000LL, "--count", "must be in [1, 1e8]");
+  if (o.scenarios_dir.empty()) {
+    require(o.count >= 1 && o.count <= 100'000'000LL, "--count", "must be in [1, 1e8]");
+  } else {
+    require(o.count == 0, "--count", "does not go with --scenarios (every file is rolled out)");
+    require(!o.behavior, "--behavior", "does not go with --scenarios (each file has its own)");
+  }
   require(o.shard_size >= 1, "--shard-size", "must be at least 1");
   require(!o.planners.empty(), "--planner", "names no planner");
   require(!o.out_dir.empty(), "--out", "must name a directory");
@@ -115,6 +168,14 @@ std::string rollout_row(long long index, const Scenario& s, const std::string& p
   return row + "," + m.target_lane_slot + "," + run::csv_field(r.reason) + "\n";
 }
 
+void write_scene_index(const std::string& out_dir, const SceneFiles& files) {
+  std::string text = "index,file\n";
+  for (std::size_t i = 0; i < files.names.size(); ++i) {
+    text += std::to_string(i) + "," + run::csv_field(files.names[i]) + "\n";
+  }
+  lanechange::detail::write_file_atomically((fs::path(out_dir) / "scenes.csv").string(), text);
+}
+
 }  // namespace
 
 std::vector<std::string> rollout_columns() {
@@ -151,10 +212,13 @@ EvaluateReport evaluate(const EvaluateOptions& o, const EvaluateRun& run) {
   for (const auto& name : o.planners) {
     planners.push_back(o.make_planner(name, o.config, o.model_dir));
   }
+  const SceneFiles files = load_scene_files(o);
+  const long long count =
+      files.names.empty() ? o.count : static_cast<long long>(files.names.size());
   const auto start = std::chrono::steady_clock::now();
-  const json parameters = parameters_of(o);
+  const json parameters = parameters_of(o, files);
   EvaluateReport report;
-  report.shards_total = (o.count + o.shard_size - 1) / o.shard_size;
+  report.shards_total = (count + o.shard_size - 1) / o.shard_size;
   run::Team& team = run::team_or_alone(run.team);
   if (run::decide_on_rank_zero(team, "--out", [&] { return prepare(o, parameters) ? 1 : 0; }) ==
       1) {
@@ -172,7 +236,7 @@ EvaluateReport evaluate(const EvaluateOptions& o, const EvaluateRun& run) {
   const ScenarioSampler sampler(o.config, o.seed);
   const auto per_shard = static_cast<long long>(planners.size());
   long long total = 0;
-  for (long long s : todo) total += std::min(o.shard_size, o.count - s * o.shard_size) * per_shard;
+  for (long long s : todo) total += std::min(o.shard_size, count - s * o.shard_size) * per_shard;
   run::Progress progress(run.progress, run.progress_on_terminal, total, -1.0, "evaluate",
                          "rollouts");
   std::atomic<std::size_t> next{0};
@@ -185,8 +249,10 @@ EvaluateReport evaluate(const EvaluateOptions& o, const EvaluateRun& run) {
         const long long shard = todo[i];
         std::string rows = detail::csv_header(rollout_columns());
         const long long first = shard * o.shard_size;
-        for (long long index = first; index < std::min(o.count, first + o.shard_size); ++index) {
-          const Scenario s = sampler.sample(static_cast<std::uint64_t>(index), o.behavior);
+        for (long long index = first; index < std::min(count, first + o.shard_size); ++index) {
+          const Scenario s = files.scenes.empty()
+                                 ? sampler.sample(static_cast<std::uint64_t>(index), o.behavior)
+                                 : files.scenes[static_cast<std::size_t>(index)];
           for (std::size_t p = 0; p < planners.size(); ++p) {
             const Rollout r = simulate(s, *planners[p], o.config, {o.duration});
             rows += rollout_row(index, s, o.planners[p], r);
@@ -215,6 +281,7 @@ EvaluateReport evaluate(const EvaluateOptions& o, const EvaluateRun& run) {
   team.barrier();
   if (team.rank() == 0) {
     detail::write_results(o.out_dir, report.shards_total);
+    if (!files.names.empty()) write_scene_index(o.out_dir, files);
     json manifest = {
         {"format", kEvaluationFormat}, {"status", "complete"}, {"parameters", parameters}};
     lanechange::detail::write_file_atomically((fs::path(o.out_dir) / kManifest).string(),

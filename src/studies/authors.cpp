@@ -13,6 +13,7 @@
 #include <thread>
 
 #include "lanechange/error.hpp"
+#include "lanechange/run/markdown.hpp"
 #include "lanechange/run/quantile.hpp"
 #include "run/json_numbers.hpp"
 
@@ -720,11 +721,12 @@ void to_json(json& out, const AuthorsSummary& s) {
          {"total_plan_s", s.total_plan_s}};
 }
 
-std::string to_markdown(const AuthorsSummary& s) {
-  std::ostringstream o;
-  char buf[256];
-  const auto pct = [](int n, int d) { return d > 0 ? 100.0 * n / d : 0.0; };
-  o << "| count | records |\n|---|---:|\n";
+namespace {
+
+const std::vector<run::Align> kCountColumns = {run::Align::Left, run::Align::Right};
+
+std::string counts_markdown(const AuthorsSummary& s) {
+  run::Table table{{"count", "records"}, {}};
   const std::pair<const char*, int> rows[] = {
       {"records", s.records},
       {"theirs solved", s.theirs_solved},
@@ -737,32 +739,37 @@ std::string to_markdown(const AuthorsSummary& s) {
       {"ours lower (rel < -tol)", s.ours_lower},
       {"ours higher (rel > tol)", s.ours_higher},
   };
-  for (const auto& [name, n] : rows) o << "| " << name << " | " << n << " |\n";
+  for (const auto& [name, n] : rows) table.rows.push_back({name, std::to_string(n)});
+  return run::markdown(table, kCountColumns);
+}
+
+std::string verdict_markdown(const AuthorsSummary& s) {
+  const auto pct = [](int n, int d) { return d > 0 ? 100.0 * n / d : 0.0; };
+  char buf[256];
   std::snprintf(buf, sizeof buf,
                 "\nOf their %d solved records, ours is at most %.1f%% above theirs on %d "
                 "(%.1f%%; bar 90%%); within +-%.1f%% on %d (%.1f%%).\n",
                 s.theirs_solved, 100 * s.tolerance, s.at_most_tolerance_above,
                 100 * s.share_at_most_tolerance_above, 100 * s.tolerance, s.match,
                 pct(s.match, s.theirs_solved));
-  o << buf;
+  std::string out = buf;
   std::snprintf(buf, sizeof buf,
                 "Of their %d no_solution records, we fail too on %d (%.1f%%). Acceptance: %s.\n",
                 s.theirs_no_solution, s.neither_solves, 100 * s.share_no_solution_agreed,
                 s.acceptance_met ? "met" : "NOT met");
-  o << buf;
-  o << "\n| our status on their solved records | count |\n|---|---:|\n";
-  for (const auto& [name, n] : s.our_statuses) o << "| " << name << " | " << n << " |\n";
-  o << "\n| cause | count |\n|---|---:|\n";
-  for (const auto& [cause, n] : s.causes) o << "| " << to_string(cause) << " | " << n << " |\n";
-  o << "\n| quantile |";
+  return out + buf;
+}
+
+std::string quantiles_markdown(const AuthorsSummary& s) {
+  run::Table table{{"quantile"}, {}};
+  std::vector<run::Align> align = {run::Align::Left};
+  char buf[64];
   for (double q : s.qs) {
-    std::snprintf(buf, sizeof buf, " p%g |", 100 * q);
-    o << buf;
+    std::snprintf(buf, sizeof buf, "p%g", 100 * q);
+    table.header.emplace_back(buf);
+    align.push_back(run::Align::Right);
   }
-  o << "\n|---|";
-  for (std::size_t i = 0; i < s.qs.size(); ++i) o << "---:|";
-  o << "\n";
-  const std::pair<const char*, const std::vector<Quantile>*> tables[] = {
+  const std::pair<const char*, const std::vector<Quantile>*> rows[] = {
       {"relative difference (ours - theirs) / theirs", &s.relative_difference},
       {"abs relative difference", &s.abs_relative_difference},
       {"max abs dx (m)", &s.max_dx},
@@ -776,17 +783,30 @@ std::string to_markdown(const AuthorsSummary& s) {
       {"target end x, theirs - ours (m)", &s.target_end_dx},
       {"plan time (ms)", &s.plan_ms},
   };
-  for (const auto& [name, qs] : tables) {
-    o << "| " << name << " |";
+  for (const auto& [name, qs] : rows) {
+    std::vector<std::string> row = {name};
     for (const Quantile& q : *qs) {
-      std::snprintf(buf, sizeof buf, " %.4g |", q.value);
-      o << buf;
+      std::snprintf(buf, sizeof buf, "%.4g", q.value);
+      row.emplace_back(buf);
     }
-    o << "\n";
+    table.rows.push_back(std::move(row));
   }
-  std::snprintf(buf, sizeof buf, "\nTotal plan time %.1f s.\n", s.total_plan_s);
-  o << buf;
-  return o.str();
+  return run::markdown(table, align);
+}
+
+}  // namespace
+
+std::string to_markdown(const AuthorsSummary& s) {
+  run::Table statuses{{"our status on their solved records", "count"}, {}};
+  for (const auto& [name, n] : s.our_statuses) statuses.rows.push_back({name, std::to_string(n)});
+  run::Table causes{{"cause", "count"}, {}};
+  for (const auto& [cause, n] : s.causes) {
+    causes.rows.push_back({std::string(to_string(cause)), std::to_string(n)});
+  }
+  char total[64];
+  std::snprintf(total, sizeof total, "\nTotal plan time %.1f s.\n", s.total_plan_s);
+  return counts_markdown(s) + verdict_markdown(s) + "\n" + run::markdown(statuses, kCountColumns) +
+         "\n" + run::markdown(causes, kCountColumns) + "\n" + quantiles_markdown(s) + total;
 }
 
 std::string run_authors_study(const AuthorsStudyOptions& o) {

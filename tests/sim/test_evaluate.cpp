@@ -7,6 +7,8 @@
 
 #include "lanechange/error.hpp"
 #include "lanechange/run/quantile.hpp"
+#include "lanechange/sampler.hpp"
+#include "lanechange/scenario.hpp"
 #include "lanechange/sim/evaluate.hpp"
 #include "test_helpers.hpp"
 
@@ -165,6 +167,58 @@ TEST(Evaluate, MpiRanksWriteWhatThreadsWrite) {
   }
   EXPECT_NE(testing::read_text(dir.file("ranks/evaluation.json")).find("complete"),
             std::string::npos);
+}
+
+// The sampled scenes written as files and rolled out from the folder give
+// the sampled evaluation's rows; scenes.csv names each index's file, and a
+// resume with a changed file is refused.
+TEST(Evaluate, AFolderOfScenesRollsOutLikeTheSampledScenes) {
+  testing::TempDir dir;
+  const auto sampled = small(dir.file("sampled"));
+  (void)sim::evaluate(sampled, {2, nullptr, false});
+  std::filesystem::create_directories(dir.file("scenes"));
+  const ScenarioSampler sampler(sampled.config, sampled.seed);
+  for (int i = 0; i < sampled.count; ++i) {
+    save_scenario(sampler.sample(static_cast<std::uint64_t>(i)),
+                  dir.file("scenes/scene_" + std::to_string(i) + ".json"));
+  }
+  testing::write_text(dir.file("scenes/notes.txt"), "not a scene");
+  auto from_files = small(dir.file("files"));
+  from_files.count = 0;
+  from_files.scenarios_dir = dir.file("scenes");
+  const sim::EvaluateReport r = sim::evaluate(from_files, {2, nullptr, false});
+  EXPECT_EQ(r.rollouts, 2 * sampled.count);
+  const auto expected = lines_of(dir.file("sampled/rollouts.csv"));
+  const auto got = lines_of(dir.file("files/rollouts.csv"));
+  ASSERT_EQ(got.size(), expected.size());
+  for (std::size_t i = 0; i < got.size(); ++i) {
+    EXPECT_EQ(without_times(got[i]), without_times(expected[i])) << i;
+  }
+  const auto index = lines_of(dir.file("files/scenes.csv"));
+  ASSERT_EQ(index.size(), 1U + static_cast<std::size_t>(sampled.count));
+  EXPECT_EQ(index[1], "0,scene_0.json");
+
+  testing::write_text(dir.file("scenes/scene_3.json"), scenario_to_json(sampler.sample(99)).dump());
+  EXPECT_THROW((void)sim::evaluate(from_files, {1, nullptr, false}), InputError);
+}
+
+TEST(Evaluate, CliRefusesABadSceneFolderAndWritesNothing) {
+  testing::TempDir dir;
+  std::filesystem::create_directories(dir.file("scenes"));
+  const auto empty = testing::run_cli("evaluate --scenarios " + dir.file("scenes") +
+                                      " --planner keep-lane --out " + dir.file("a"));
+  EXPECT_EQ(empty.exit_code, 2) << empty.output;
+  testing::write_text(dir.file("scenes/broken.json"), "{\"format\": \"lanechange.scenario/1\"");
+  const auto broken = testing::run_cli("evaluate --scenarios " + dir.file("scenes") +
+                                       " --planner keep-lane --out " + dir.file("b"));
+  EXPECT_EQ(broken.exit_code, 2) << broken.output;
+  EXPECT_NE(broken.output.find("broken.json"), std::string::npos) << broken.output;
+  EXPECT_FALSE(std::filesystem::exists(dir.file("b")));
+  const auto both = testing::run_cli("evaluate --scenarios " + dir.file("scenes") +
+                                     " --count 3 --seed 1 --out " + dir.file("c"));
+  EXPECT_EQ(both.exit_code, 2) << both.output;
+  const auto neither = testing::run_cli("evaluate --planner keep-lane --out " + dir.file("d"));
+  EXPECT_EQ(neither.exit_code, 2) << neither.output;
 }
 
 TEST(Evaluate, CliRefusesBadInputWithTwo) {

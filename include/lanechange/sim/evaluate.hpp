@@ -25,9 +25,12 @@ using PlannerFactory = std::function<std::shared_ptr<const planner::ClosedLoopPl
     std::string_view name, const Config& config, const std::string& model_dir)>;
 
 struct EvaluateOptions {
-  long long count = 0;
+  long long count = 0;  ///< sampled scenes; with scenarios_dir: none
   std::uint64_t seed = 0;
   std::optional<Behavior> behavior;  ///< none: each scenario's own draw
+  /// Roll out every scene file (*.json) of this folder, in the order of their
+  /// names, instead of sampled scenes; scenes.csv maps each index to its file.
+  std::string scenarios_dir;
   std::vector<std::string> planners;
   std::string model_dir;  ///< for mlp-miqp
   std::string out_dir;
