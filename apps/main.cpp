@@ -46,9 +46,7 @@ void add_commands(CLI::App& app, const GlobalOptions& global) {
   cmd::add_authors_study(app, config);
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
+int run(int argc, char** argv) {
   CLI::App app{"lanechange: motion planning for automated lane changes"};
   app.require_subcommand(1);
   GlobalOptions global;
@@ -68,9 +66,20 @@ int main(int argc, char** argv) {
   } catch (const lc::InputError& e) {
     std::cerr << "error: " << e.what() << "\n";
     return kExitBadInput;
+  }
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    return run(argc, argv);
   } catch (const std::exception& e) {
     std::cerr << "error: " << e.what() << "\n";
     return 1;
+  } catch (...) {
+    std::cerr << "error: unknown exception\n";
+    return 1;
   }
-  return 0;
 }
