@@ -19,7 +19,6 @@ struct GenerateArgs {
   std::string out_dir;
   int jobs = 0;
   std::string solver = "fast";
-  std::string config_path;
   int steps = 0;
   long long shard_size = 200;
   double time_limit = 60.0;
@@ -34,7 +33,7 @@ data::GenerateOptions to_options(const GenerateArgs& a, const ConfigSource& glob
   o.solver = a.solver;
   o.shard_size = a.shard_size;
   o.time_limit_s = a.time_limit;
-  o.config = a.config_path.empty() ? global_config() : load_config(a.config_path);
+  o.config = global_config();
   if (a.steps > 0) o.config.expert.steps = a.steps;
   return o;
 }
@@ -79,7 +78,6 @@ void add_generate(CLI::App& app, const ConfigSource& config) {
   cmd->add_option("--jobs", a->jobs, "Worker threads per process (default: all cores)")
       ->check(CLI::Range(0, 1024));
   cmd->add_option("--solver", a->solver, "MIQP back-end: fast (ours) or reference (Bonmin)");
-  cmd->add_option("--config", a->config_path, "Config JSON file (overrides the global one)");
   cmd->add_option("--steps", a->steps, "Override N, the plan's steps (cheaper data)")
       ->check(CLI::Range(2, 10000));
   cmd->add_option("--shard-size", a->shard_size, "Scenarios per shard file");

@@ -49,6 +49,8 @@ void add_commands(CLI::App& app, const GlobalOptions& global) {
 int run(int argc, char** argv) {
   CLI::App app{"lanechange: motion planning for automated lane changes"};
   app.require_subcommand(1);
+  // --config and --preset may also follow the subcommand's name.
+  app.fallthrough();
   GlobalOptions global;
   app.add_option("--config", global.config_path, "Config JSON file (overrides --preset)");
   app.add_option("--preset", global.preset, "Config preset: paper or authors")

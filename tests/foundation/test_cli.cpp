@@ -164,5 +164,15 @@ TEST(Cli, SharedOptionsHaveOneNameAndDefault) {
   EXPECT_EQ(testing::run_cli("train --help").output.find("--dagger"), std::string::npos);
 }
 
+// The global options may follow the subcommand too: the same config either way.
+TEST(Cli, GlobalOptionsGoBeforeOrAfterTheSubcommand) {
+  const auto before = testing::run_cli("--preset authors config");
+  const auto after = testing::run_cli("config --preset authors");
+  ASSERT_EQ(before.exit_code, 0) << before.output;
+  ASSERT_EQ(after.exit_code, 0) << after.output;
+  EXPECT_EQ(before.output, after.output);
+  EXPECT_NE(before.output, testing::run_cli("config").output);
+}
+
 }  // namespace
 }  // namespace lanechange
