@@ -824,13 +824,16 @@ std::string run_authors_study(const AuthorsStudyOptions& o) {
   nlohmann::json j = summary;
   j["wall_s"] = wall;
   j["threads"] = o.settings.threads;
-  std::ofstream(out / "summary.json") << j.dump(2) << "\n";
+  std::ofstream summary_json(out / "summary.json");
+  summary_json << j.dump(2) << "\n";
   const std::string md = to_markdown(summary);
   std::ofstream markdown(out / "summary.md");
   markdown << md;
   lines.close();
+  summary_json.close();
   markdown.close();
-  if (!lines || !markdown) throw InputError("--out", o.out_dir + " cannot be written");
+  if (!lines || !summary_json || !markdown)
+    throw InputError("--out", o.out_dir + " cannot be written");
   char wall_line[120];
   std::snprintf(wall_line, sizeof wall_line, "Wall time %g s on %d thread(s).\n", wall,
                 o.settings.threads);
