@@ -88,7 +88,7 @@ const std::vector<ex::LaneChangeQp>& first_round_problems() {
 
 struct Samples {
   std::vector<double> fast_solve_ms, square_root_solve_ms, dense_solve_ms, reference_solve_ms,
-      plan_ms;
+      plan_ms, fixed_gap_plan_ms;
   std::vector<long> plan_allocations, plan_bytes;
 };
 Samples g_samples;
@@ -158,8 +158,11 @@ void BM_ReferenceSolve(benchmark::State& state) {
             g_samples.reference_solve_ms);
 }
 
-void BM_FastPlan(benchmark::State& state) {
-  const ex::ExpertPlanner planner(lc::Config{}, std::make_shared<ex::FastLaneChangeSolver>());
+// Whole plans under `config`, timed into `ms`; `count_heap` also records
+// the heap use of every plan after the first.
+void plan_all(benchmark::State& state, const lc::Config& config, std::vector<double>& ms,
+              bool count_heap) {
+  const ex::ExpertPlanner planner(config, std::make_shared<ex::FastLaneChangeSolver>());
   std::size_t i = 0;
   for (auto _ : state) {
     const auto& s = scenarios()[i % scenarios().size()];
@@ -168,13 +171,24 @@ void BM_FastPlan(benchmark::State& state) {
     const double t0 = thread_cpu_ms();
     auto result = planner.plan(s);
     benchmark::DoNotOptimize(result);
-    g_samples.plan_ms.push_back(thread_cpu_ms() - t0);
-    if (i > 0) {  // the target: no allocation once the thread's first plan has set up
+    ms.push_back(thread_cpu_ms() - t0);
+    if (count_heap && i > 0) {  // the target: no allocation once the thread's first plan has set up
       g_samples.plan_allocations.push_back(g_allocations.load() - allocations);
       g_samples.plan_bytes.push_back(g_bytes.load() - bytes);
     }
     ++i;
   }
+}
+
+void BM_FastPlan(benchmark::State& state) {
+  plan_all(state, lc::Config{}, g_samples.plan_ms, true);
+}
+
+// The same plans through Eq. 1's gap alone: what the gap choice costs.
+void BM_FastPlanFixedGap(benchmark::State& state) {
+  lc::Config config;
+  config.expert.gap = lc::GapChoice::Fixed;
+  plan_all(state, config, g_samples.fixed_gap_plan_ms, false);
 }
 
 template <class T>
@@ -246,6 +260,15 @@ void print_summary() {
                                                       static_cast<double>(g_samples.plan_ms.size());
   std::printf("full plan: mean %.3f ms, 90th percentile %.3f ms (%.0f plans per second of CPU)\n",
               mean, quantile(g_samples.plan_ms, 0.9), mean > 0 ? 1000.0 / mean : 0.0);
+  const double fixed_gap = median(g_samples.fixed_gap_plan_ms);
+  if (fixed_gap > 0) {
+    std::printf(
+        "full plan through Eq. 1's gap alone (expert.gap = fixed): median %.3f ms, 99th "
+        "percentile %.3f ms; with the gap choice: 99th percentile %.3f ms; ratio best / fixed "
+        "(medians, this run): %.2f\n",
+        fixed_gap, quantile(g_samples.fixed_gap_plan_ms, 0.99), quantile(g_samples.plan_ms, 0.99),
+        median(g_samples.plan_ms) / fixed_gap);
+  }
   std::printf("heap per plan: median %.0f allocations, %.0f bytes; process peak RSS %ld KiB\n",
               median(g_samples.plan_allocations), median(g_samples.plan_bytes), usage.ru_maxrss);
 }
@@ -257,6 +280,7 @@ BENCHMARK(BM_FastSolveSquareRoot)->Unit(benchmark::kMillisecond)->Iterations(fas
 BENCHMARK(BM_FastSolveDense)->Unit(benchmark::kMillisecond)->Iterations(fast_solves());
 BENCHMARK(BM_ReferenceSolve)->Unit(benchmark::kMillisecond)->Iterations(reference_scenarios());
 BENCHMARK(BM_FastPlan)->Unit(benchmark::kMillisecond)->Iterations(300);
+BENCHMARK(BM_FastPlanFixedGap)->Unit(benchmark::kMillisecond)->Iterations(300);
 
 int main(int argc, char** argv) {
   benchmark::Initialize(&argc, argv);

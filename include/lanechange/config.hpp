@@ -90,6 +90,12 @@ enum class Globalisation {
   TrustRegion,  ///< then more rounds, each within a shrinking box of the last (trust_*)
 };
 
+/// Which gaps of the target lane the expert may merge into (docs/expert.md, "The gap").
+enum class GapChoice {
+  Fixed,  ///< only between the follower and the target: the paper's Eq. 1
+  Best,   ///< every gap, ahead of and behind each target-lane car; the best plan wins
+};
+
 struct ExpertSettings {
   double horizon = 5.0;            ///< t_f, s
   int steps = 50;                  ///< N
@@ -138,6 +144,7 @@ struct ExpertSettings {
   /// Where the warm start and the terminal-x term aim: behind the target by
   /// its safe distance (NOTES.md), or at the target itself (authors' code).
   bool aim_behind_target = true;
+  GapChoice gap = GapChoice::Best;
 };
 
 /// What a drop of y is measured from, for "y never decreases".

@@ -67,6 +67,8 @@ struct Scenario {
   /// of the ego's length; a longer car's centre sits further from its
   /// bumper, so its standstill distance grows by half the difference.
   [[nodiscard]] SafetyMargins centre_safe_distances() const;
+  /// One of Eq. 1's distances, `base`, centre to centre to `which`, as above.
+  [[nodiscard]] SafeDistance centre_safe_distance(Car which, SafeDistance base) const;
   [[nodiscard]] CarState& car(Car which);
   /// Lane centre of a car: 0 for the leader, lane_width for the others.
   [[nodiscard]] double lane_center(Car which) const;

@@ -160,6 +160,7 @@ Config authors_preset() {
   c.expert.warm_start = WarmStart::Authors;
   c.expert.aim_behind_target = false;
   c.expert.globalisation = Globalisation::Off;  // more than 10 rounds is a failure there
+  c.expert.gap = GapChoice::Fixed;
   c.traffic_integration = TrafficIntegration::Euler;
   c.sampler.target_speed = {20.0 / 3.6, 40.0 / 3.6};
   return c;

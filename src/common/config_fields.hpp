@@ -61,6 +61,10 @@ inline constexpr std::array<detail::EnumName<Globalisation>, 2> enum_names(Globa
   return {{{Globalisation::Off, "off"}, {Globalisation::TrustRegion, "trust_region"}}};
 }
 
+inline constexpr std::array<detail::EnumName<GapChoice>, 2> enum_names(GapChoice) {
+  return {{{GapChoice::Fixed, "fixed"}, {GapChoice::Best, "best"}}};
+}
+
 template <class V, class S>
 void visit_fields(V& v, S& s) requires std::same_as<std::remove_const_t<S>, VehicleSize> {
   v("length", s.length);
@@ -124,6 +128,7 @@ void visit_fields(V& v, S& s) requires std::same_as<std::remove_const_t<S>, Expe
   v("min_turn_radius", s.min_turn_radius);
   v("warm_start", s.warm_start);
   v("aim_behind_target", s.aim_behind_target);
+  v("gap", s.gap);
 }
 
 template <class V, class S>

@@ -61,7 +61,9 @@ class StrategyLabeller {
     const double dt = now.horizon / now.steps;
     const std::vector<int> modes = planner::shifted(plan_.modes, step, now.steps);
     const expert::Iterate guess = planner::shifted(plan_.path, step, now.steps, dt);
-    return data::plan_outcome(fixed_, now, time_limit_s, {&guess, &modes, false});
+    expert::PlanHints hints{&guess, &modes, false};
+    hints.gap = &plan_.gap;
+    return data::plan_outcome(fixed_, now, time_limit_s, hints);
   }
 
  private:

@@ -333,7 +333,7 @@ std::vector<std::string> where_others_beat_ours(const std::vector<sim::RolloutRo
     s += share(theirs, [](const auto* r) { return r->collision; });
     s += ". Of its successes, ";
     s += ahead_of_target(theirs);
-    s += " end ahead of the target, a gap Eq. 1 keeps the expert out of (mlp-miqp: ";
+    s += " end ahead of the target, outside Eq. 1's gap (mlp-miqp: ";
     s += ahead_of_target(ours);
     s += ").";
     out.push_back(std::move(s));

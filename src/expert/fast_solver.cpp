@@ -661,7 +661,14 @@ class Search {
   [[nodiscard]] double seconds_so_far() const {
     return std::chrono::duration<double>(Clock::now() - start_).count();
   }
-  [[nodiscard]] double prune_level() const { return prune_above(incumbent_, settings_); }
+  /// Nodes whose bound reaches this are pruned: the incumbent's gap, or the
+  /// caller's cutoff while no incumbent beats it.
+  [[nodiscard]] double prune_level() const {
+    if (std::isinf(incumbent_) && std::isfinite(settings_.objective_cutoff)) {
+      return settings_.objective_cutoff;
+    }
+    return std::min(prune_above(incumbent_, settings_), settings_.objective_cutoff);
+  }
   void accept(NodeOutcome& o);
   bool stopped_at_limit(double pending_bound);
   void explore(const std::vector<int>& modes, NodeOutcome o, double inherited_bound);
@@ -674,10 +681,11 @@ class Search {
   LaneChangeSolution& out_;
   double incumbent_ = kInfinity;
   bool numerical_trouble_ = false;
+  bool cut_off_ = false;  ///< a node was pruned by the cutoff alone
 };
 
 void Search::accept(NodeOutcome& o) {
-  if (o.objective < incumbent_) {
+  if (o.objective < incumbent_ && o.objective < settings_.objective_cutoff) {
     incumbent_ = o.objective;
     out_.path = std::move(o.path);
     out_.objective = incumbent_;
@@ -762,11 +770,13 @@ bool Search::stopped_at_limit(double pending_bound) {
 // at every node, or branches on it.
 void Search::explore(const std::vector<int>& modes, NodeOutcome o, double inherited_bound) {
   numerical_trouble_ = numerical_trouble_ || o.numerical_failure;
+  cut_off_ = cut_off_ || o.cut_off || (o.feasible && o.objective >= settings_.objective_cutoff);
   if (!o.feasible || o.objective >= prune_level()) return;
   int k = branching_node(qp_, ws_, modes, o.path, o.coarse ? kCoarseViolation : kModeTolerance);
   if (k < 0 && o.coarse) {  // maybe a leaf: only a solution can tell
     o = solve_node(qp_, modes, ws_, prune_level());
     numerical_trouble_ = numerical_trouble_ || o.numerical_failure;
+    cut_off_ = cut_off_ || o.cut_off;
     if (!o.feasible || o.objective >= prune_level()) return;
     k = branching_node(qp_, ws_, modes, o.path, kModeTolerance);
   }
@@ -805,6 +815,13 @@ void Search::finish() {
     out_.modes = modes_of(qp_, out_.path);
     // Every node left behind was pruned within the gap of the incumbent.
     out_.best_bound = out_.objective;
+    return;
+  }
+  if (cut_off_ && !numerical_trouble_) {
+    out_.status = MiqpStatus::Cutoff;
+    out_.best_bound = settings_.objective_cutoff;
+    out_.objective = settings_.objective_cutoff;
+    out_.message = "no point is cheaper than the cutoff";
     return;
   }
   out_.status = numerical_trouble_ ? MiqpStatus::NumericalError : MiqpStatus::Infeasible;

@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <initializer_list>
 #include <numbers>
+#include <string>
 
 namespace lanechange::expert {
 
@@ -63,19 +65,48 @@ HalfSpace row(double gx, double gy, double gv, double upper, double gtheta = 0.0
   return h;
 }
 
-// The rows of Eq. 1 at one node, against the cars' positions there.
+// The rows of Eq. 1 at one node, against the cars' positions there: the
+// leader's in the ego lane, the gap's in the target lane.
 struct CarRows {
-  HalfSpace behind_leader, ahead_of_follower, behind_target;
+  std::vector<HalfSpace> ego_lane, target_lane;
 };
 
-CarRows car_rows(const Scenario& s, const TrafficPrediction& p, int index) {
-  const SafetyMargins d = s.centre_safe_distances();
-  const double follower_v = p.car(Car::Follower).v[index];
-  return {row(1.0, 0.0, d.leader.time_headway, p.car(Car::Leader).x[index] - d.leader.standstill),
-          row(-1.0, 0.0, 0.0,
-              -(p.car(Car::Follower).x[index] + d.follower.standstill +
-                d.follower.time_headway * follower_v)),
-          row(1.0, 0.0, d.target.time_headway, p.car(Car::Target).x[index] - d.target.standstill)};
+// x_ego + h v_ego <= x_car - d: behind the car, by its distance at the ego's speed.
+HalfSpace behind(const SafeDistance& d, double car_x) {
+  return row(1.0, 0.0, d.time_headway, car_x - d.standstill);
+}
+
+// x_car + d + h v_car <= x_ego: ahead of the car, by its distance at its own speed.
+HalfSpace ahead_of(const SafeDistance& d, double car_x, double car_v) {
+  return row(-1.0, 0.0, 0.0, -(car_x + d.standstill + d.time_headway * car_v));
+}
+
+CarRows car_rows(const Scenario& s, const TrafficPrediction& p, int index, const Gap& gap) {
+  CarRows r;
+  const auto at = static_cast<std::size_t>(index);
+  r.ego_lane.push_back(behind(s.centre_safe_distance(Car::Leader, s.safe_distance.leader),
+                              p.car(Car::Leader).x[at]));
+  for (const Car c : gap.behind) {
+    const SafeDistance d = s.centre_safe_distance(c, s.safe_distance.follower);
+    r.target_lane.push_back(ahead_of(d, p.car(c).x[at], p.car(c).v[at]));
+  }
+  for (const Car c : gap.ahead) {
+    const SafeDistance d = s.centre_safe_distance(c, s.safe_distance.target);
+    r.target_lane.push_back(behind(d, p.car(c).x[at]));
+  }
+  return r;
+}
+
+// The rows of `first`, then those of `second`, then `extra`.
+std::vector<HalfSpace> joined(const std::vector<HalfSpace>& first,
+                              const std::vector<HalfSpace>& second,
+                              std::initializer_list<HalfSpace> extra) {
+  std::vector<HalfSpace> out;
+  out.reserve(first.size() + second.size() + extra.size());
+  out.insert(out.end(), first.begin(), first.end());
+  out.insert(out.end(), second.begin(), second.end());
+  out.insert(out.end(), extra.begin(), extra.end());
+  return out;
 }
 
 // Where the lane line is and what the body is, at one node.
@@ -92,9 +123,8 @@ std::vector<LaneMode> lane_modes(const CarRows& r, LaneRule rule, const LaneGeom
   const double boundary = lane.boundary;
   const double half_width = lane.half_width;
   if (rule == LaneRule::EitherOr) {
-    return {{LaneOccupancy::EgoLane, {r.behind_leader, row(0, 1, 0, boundary)}},
-            {LaneOccupancy::TargetLane,
-             {r.ahead_of_follower, r.behind_target, row(0, -1, 0, -boundary)}}};
+    return {{LaneOccupancy::EgoLane, joined(r.ego_lane, {}, {row(0, 1, 0, boundary)})},
+            {LaneOccupancy::TargetLane, joined({}, r.target_lane, {row(0, -1, 0, -boundary)})}};
   }
   if (rule == LaneRule::FootprintHeading) return footprint_heading_modes(r, lane);
   // Footprint: the body is in every lane it touches. Touching both lanes
@@ -104,12 +134,12 @@ std::vector<LaneMode> lane_modes(const CarRows& r, LaneRule rule, const LaneGeom
   // mode (they keep that mode's rows and more), so the union of the modes is
   // the same, but a relaxation no longer lets a "both lanes" node sit anywhere
   // across the road, and the modes no longer overlap.
-  return {{LaneOccupancy::EgoLane, {r.behind_leader, row(0, 1, 0, boundary - half_width)}},
+  return {{LaneOccupancy::EgoLane, joined(r.ego_lane, {}, {row(0, 1, 0, boundary - half_width)})},
           {LaneOccupancy::BothLanes,
-           {r.behind_leader, r.ahead_of_follower, r.behind_target,
-            row(0, 1, 0, boundary + half_width), row(0, -1, 0, -(boundary - half_width))}},
+           joined(r.ego_lane, r.target_lane,
+                  {row(0, 1, 0, boundary + half_width), row(0, -1, 0, -(boundary - half_width))})},
           {LaneOccupancy::TargetLane,
-           {r.ahead_of_follower, r.behind_target, row(0, -1, 0, -(boundary + half_width))}}};
+           joined({}, r.target_lane, {row(0, -1, 0, -(boundary + half_width))})}};
 }
 
 // The body turned by theta reaches half_width cos(theta) + half_length
@@ -131,14 +161,13 @@ std::vector<LaneMode> footprint_heading_modes(const CarRows& r, const LaneGeomet
   const double chord_offset = std::abs(lo) - chord_slope * lo;
   const double reach = w + l * chord_offset;
   const double slope = l * chord_slope;
-  return {
-      {LaneOccupancy::EgoLane, {r.behind_leader, row(0, 1, 0, b - w, l), row(0, 1, 0, b - w, -l)}},
-      {LaneOccupancy::BothLanes,
-       {r.behind_leader, r.ahead_of_follower, r.behind_target, row(0, 1, 0, b + reach, -slope),
-        row(0, -1, 0, reach - b, -slope)}},
-      {LaneOccupancy::TargetLane,
-       {r.ahead_of_follower, r.behind_target, row(0, -1, 0, -(b + w), l),
-        row(0, -1, 0, -(b + w), -l)}}};
+  return {{LaneOccupancy::EgoLane,
+           joined(r.ego_lane, {}, {row(0, 1, 0, b - w, l), row(0, 1, 0, b - w, -l)})},
+          {LaneOccupancy::BothLanes,
+           joined(r.ego_lane, r.target_lane,
+                  {row(0, 1, 0, b + reach, -slope), row(0, -1, 0, reach - b, -slope)})},
+          {LaneOccupancy::TargetLane,
+           joined({}, r.target_lane, {row(0, -1, 0, -(b + w), l), row(0, -1, 0, -(b + w), -l)})}};
 }
 
 // The headings a node at time t can have: its bounds, cut to what the yaw
@@ -149,15 +178,61 @@ Interval reachable_headings(const Scenario& s, Interval bounds, double t) {
   return lo <= hi ? Interval{lo, hi} : bounds;
 }
 
-double terminal_aim(const Scenario& s, const Config& c, const TrafficPrediction& p) {
-  const CarTrack& target = p.car(Car::Target);
-  if (!c.expert.aim_behind_target) return target.x.back();
-  const SafeDistance d = s.centre_safe_distances().target;
-  const double ego_speed = std::min(target.v.back(), s.limits.v.hi);
-  return target.x.back() - d.standstill - d.time_headway * ego_speed;
+}  // namespace
+
+std::optional<Car> Gap::car_behind() const {
+  return behind.empty() ? std::nullopt : std::optional<Car>(behind.back());
 }
 
-}  // namespace
+std::optional<Car> Gap::car_ahead() const {
+  return ahead.empty() ? std::nullopt : std::optional<Car>(ahead.front());
+}
+
+Gap paper_gap() { return {{Car::Follower}, {Car::Target}}; }
+
+std::vector<Gap> target_lane_gaps(const Scenario& s, GapChoice choice) {
+  if (choice == GapChoice::Fixed) return {paper_gap()};
+  std::vector<Car> lane{Car::Follower, Car::Target};
+  std::stable_sort(lane.begin(), lane.end(),
+                   [&s](Car a, Car b) { return s.car(a).x < s.car(b).x; });
+  std::vector<Gap> gaps;
+  for (std::size_t split = 0; split <= lane.size(); ++split) {
+    const auto at = lane.begin() + static_cast<std::ptrdiff_t>(split);
+    gaps.push_back({{lane.begin(), at}, {at, lane.end()}});
+  }
+  return gaps;
+}
+
+GapAim aim_into(const Scenario& s, const Config& c, const TrafficPrediction& p, const Gap& gap,
+                int node) {
+  const auto at = static_cast<std::size_t>(node);
+  if (const auto ahead = gap.car_ahead()) {
+    const CarTrack& car = p.car(*ahead);
+    GapAim aim{car.x[at], car.v[at], car.a[at]};
+    if (c.expert.aim_behind_target) {
+      const SafeDistance d = s.centre_safe_distance(*ahead, s.safe_distance.target);
+      aim.x -= d.standstill + d.time_headway * std::min(car.v[at], s.limits.v.hi);
+    }
+    return aim;
+  }
+  if (const auto behind = gap.car_behind()) {
+    const CarTrack& car = p.car(*behind);
+    GapAim aim{car.x[at], car.v[at], car.a[at]};
+    if (c.expert.aim_behind_target) {
+      const SafeDistance d = s.centre_safe_distance(*behind, s.safe_distance.follower);
+      aim.x += d.standstill + d.time_headway * car.v[at];
+    }
+    return aim;
+  }
+  return {s.ego.x + s.ego.v * s.horizon, s.ego.v, 0.0};
+}
+
+std::string describe(const Gap& gap) {
+  const auto name = [](std::optional<Car> c) {
+    return c ? std::string(lanechange::to_string(*c)) : std::string("none");
+  };
+  return name(gap.car_behind()) + "-" + name(gap.car_ahead());
+}
 
 int lane_mode_index(LaneRule rule, LaneOccupancy occupancy) {
   // The order in which lane_modes lists them.
@@ -170,6 +245,11 @@ int lane_mode_index(LaneRule rule, LaneOccupancy occupancy) {
 
 LaneChangeQp build_lane_change_qp(const Scenario& s, const Config& config, const Iterate& point,
                                   const TrafficPrediction& prediction) {
+  return build_lane_change_qp(s, config, point, prediction, paper_gap());
+}
+
+LaneChangeQp build_lane_change_qp(const Scenario& s, const Config& config, const Iterate& point,
+                                  const TrafficPrediction& prediction, const Gap& gap) {
   const ExpertSettings& e = config.expert;
   LaneChangeQp qp;
   qp.steps = s.steps;
@@ -189,7 +269,7 @@ LaneChangeQp build_lane_change_qp(const Scenario& s, const Config& config, const
   qp.lateral_reference = s.lane_width;
   qp.terminal_x_weight = e.weight_terminal_x;
   qp.yaw_rate_weight = e.weight_yaw_rate * qp.dt;
-  qp.terminal_x_reference = terminal_aim(s, config, prediction);
+  qp.terminal_x_reference = aim_into(s, config, prediction, gap, prediction.nodes() - 1).x;
   // x has no bound of its own; these never bind and give the big-M rows a box.
   constexpr double kXSlack = 50.0;
   for (int k = 0; k <= n; ++k) {
@@ -221,7 +301,7 @@ LaneChangeQp build_lane_change_qp(const Scenario& s, const Config& config, const
     const Interval heading{qp.state_lower[k][kTheta], qp.state_upper[k][kTheta]};
     const LaneGeometry lane{0.5 * s.lane_width, 0.5 * s.vehicle.width, 0.5 * s.vehicle.length,
                             reachable_headings(s, heading, k * qp.dt)};
-    qp.node_modes[k] = lane_modes(car_rows(s, prediction, index), e.lane_rule, lane);
+    qp.node_modes[k] = lane_modes(car_rows(s, prediction, index, gap), e.lane_rule, lane);
   }
   return qp;
 }

@@ -82,6 +82,8 @@ struct RoundContext {
   int predicted_steps;
   double dt;
   const std::vector<int>* first_modes;  ///< lane modes to try first in round 1 (or none)
+  const Gap* only_gap;                  ///< the one gap to plan through (or none)
+  bool first_point_is_warm_start;       ///< round 1 then warm-starts each gap on its own
 };
 
 // Keeps the round's solution within `radius` of the linearization point in x
@@ -99,15 +101,14 @@ void restrict_to_box(LaneChangeQp& qp, const Iterate& point, double radius) {
   }
 }
 
-// The round's MIQP about `point`; cars that react to the ego (IDM) are
-// predicted again along it, into `prediction`.
-LaneChangeQp linearized_qp(const Scenario& scenario, const Config& config, int predicted_steps,
-                           double dt, const Iterate& point, TrafficPrediction& prediction) {
+// The cars as a round linearized about `point` sees them: those that react
+// to the ego (IDM) are predicted again along it, into `prediction`.
+void predict_along(const Scenario& scenario, const Config& config, int predicted_steps, double dt,
+                   const Iterate& point, TrafficPrediction& prediction) {
   if (scenario.behavior == Behavior::Idm) {
     const auto ego_path = footprint_of(point);
     prediction = predict_traffic(scenario, config, predicted_steps, dt, &ego_path);
   }
-  return build_lane_change_qp(scenario, config, point, prediction);
 }
 
 bool hint_path_fits(const Scenario& scenario, const PlanHints& hints) {
@@ -130,38 +131,141 @@ int predicted_steps_of(const Scenario& scenario, const Config& config) {
 struct RoundSolution {
   LaneChangeSolution solution;
   std::vector<std::optional<LaneOccupancy>> occupancy;  ///< of the solution's modes
+  Gap gap;                                              ///< the solution's
 };
 
-// One round: the cars re-predicted along `point` when they react to the ego,
-// the dynamics linearized about it, the MIQP solved (within `radius` of the
-// point when finite). Updates the prediction the result reports.
-RoundSolution solve_round(const RoundContext& c, const Iterate& point, double radius,
-                          ExpertResult& result) {
-  MiqpSettings settings;
-  settings.time_limit_s = c.time_limit_s - elapsed_ms(c.start) / 1000.0;
-  if (settings.time_limit_s <= 0.0) {
-    // A round begun past the limit would overrun it by a whole MIQP.
-    RoundSolution late;
-    late.solution.status = MiqpStatus::TimeLimit;
-    late.solution.message = "no time left for the round";
-    return late;
-  }
-  LaneChangeQp qp =
-      linearized_qp(c.scenario, c.config, c.predicted_steps, c.dt, point, result.prediction);
-  if (std::isfinite(radius)) restrict_to_box(qp, point, radius);
-  // The previous round's lane modes (the warm start's, first) are a good
-  // first guess; the back-end proves or improves on them.
-  std::vector<int> mode_hint = result.modes;
-  if (mode_hint.empty() && c.first_modes != nullptr) mode_hint = *c.first_modes;
-  if (mode_hint.empty()) {
-    mode_hint.assign(qp.steps + 1, -1);
+// True when the path ends between the gap's framing cars as predicted.
+bool ends_in(const Gap& gap, const Iterate& path, const TrafficPrediction& p) {
+  const auto last = static_cast<std::size_t>(path.states.size()) - 1;
+  const double x = path.states.back()[kX];
+  const auto behind = gap.car_behind();
+  const auto ahead = gap.car_ahead();
+  return (!behind || p.car(*behind).x[std::min(last, p.car(*behind).x.size() - 1)] < x) &&
+         (!ahead || x < p.car(*ahead).x[std::min(last, p.car(*ahead).x.size() - 1)]);
+}
+
+// The allowed gaps, the likeliest first so that its optimum cuts the others
+// off early: the last round's, else the one the linearization point ends in.
+std::vector<Gap> gaps_in_order(const RoundContext& c, const ExpertResult& result,
+                               const Iterate& point) {
+  if (c.only_gap != nullptr) return {*c.only_gap};
+  std::vector<Gap> gaps = target_lane_gaps(c.scenario, c.config.expert.gap);
+  const bool have_last = !result.path.states.empty();
+  const auto first = std::find_if(gaps.begin(), gaps.end(), [&](const Gap& g) {
+    return have_last ? g == result.gap : ends_in(g, point, result.prediction);
+  });
+  if (first != gaps.end()) std::rotate(gaps.begin(), first, first + 1);
+  return gaps;
+}
+
+// The modes to try first: the previous round's (the warm start's, first),
+// else those the point meets best in this gap's problem.
+std::vector<int> mode_hint_for(const RoundContext& c, const ExpertResult& result,
+                               const LaneChangeQp& qp, const Iterate& point) {
+  std::vector<int> hint = result.modes;
+  if (hint.empty() && c.first_modes != nullptr) hint = *c.first_modes;
+  if (hint.empty()) {
+    hint.assign(qp.steps + 1, -1);
     for (int k = 0; k <= qp.steps; ++k) {
-      if (!qp.node_modes[k].empty()) mode_hint[k] = qp.best_mode(point, k);
+      if (!qp.node_modes[k].empty()) hint[k] = qp.best_mode(point, k);
     }
   }
-  RoundSolution out{c.solver.solve(qp, settings, {c.workspace, &mode_hint, &point.controls}), {}};
-  out.occupancy = occupancy_of(qp, out.solution.modes);
+  return hint;
+}
+
+// Adds a gap's solve to the round's counts.
+void add_work(LaneChangeSolution& total, const LaneChangeSolution& part) {
+  total.nodes += part.nodes;
+  total.qp_iterations += part.qp_iterations;
+  total.incumbent_qps += part.incumbent_qps;
+  total.solve_ms += part.solve_ms;
+}
+
+// What one gap's solve leaves: its solution and the cars as it saw them.
+struct GapSolve {
+  LaneChangeSolution solution;
+  LaneChangeQp qp;
+  TrafficPrediction prediction;
+};
+
+// The gap's MIQP linearized about `point`, the cars re-predicted along it when
+// they react to the ego, solved within `radius` of it when finite, cut off at
+// `cutoff`.
+GapSolve solve_gap(const RoundContext& c, const Gap& gap, const Iterate& point, double radius,
+                   double cutoff, const ExpertResult& result, const TrafficPrediction& base) {
+  GapSolve out;
+  out.prediction = base;
+  predict_along(c.scenario, c.config, c.predicted_steps, c.dt, point, out.prediction);
+  out.qp = build_lane_change_qp(c.scenario, c.config, point, out.prediction, gap);
+  if (std::isfinite(radius)) restrict_to_box(out.qp, point, radius);
+  const std::vector<int> mode_hint = mode_hint_for(c, result, out.qp, point);
+  MiqpSettings settings;
+  settings.time_limit_s = c.time_limit_s - elapsed_ms(c.start) / 1000.0;
+  settings.objective_cutoff = cutoff;
+  out.solution = c.solver.solve(out.qp, settings, {c.workspace, &mode_hint, &point.controls});
   return out;
+}
+
+// Below `objective` by more than the gap tolerances: what another gap must beat.
+double cutoff_below(double objective) {
+  const MiqpSettings tolerances;
+  return objective -
+         std::max(tolerances.absolute_gap, tolerances.relative_gap * std::abs(objective));
+}
+
+// One round: the MIQP of each allowed gap solved, each cut off by the best so
+// far, so the least of their optima is the round's, exactly. Each gap is
+// linearized about `point`, or, with `warm_start_per_gap` (a first round
+// from no plan), about a warm start aimed into it: a path aimed elsewhere
+// may be too slow or too fast to linearize a change into this gap. A gap whose
+// solve stops at a limit or fails ends the round with that status. Updates the
+// prediction the result reports.
+RoundSolution solve_round(const RoundContext& c, const Iterate& point, double radius,
+                          ExpertResult& result, bool warm_start_per_gap = false) {
+  RoundSolution best;
+  best.solution.status = MiqpStatus::Infeasible;
+  if (c.time_limit_s - elapsed_ms(c.start) / 1000.0 <= 0.0) {
+    // A round begun past the limit would overrun it by a whole MIQP.
+    best.solution.status = MiqpStatus::TimeLimit;
+    best.solution.message = "no time left for the round";
+    return best;
+  }
+  const TrafficPrediction base = result.prediction;
+  LaneChangeSolution work;
+  const std::vector<Gap> gaps = gaps_in_order(c, result, point);
+  for (const Gap& gap : gaps) {
+    const Iterate own_point =
+        warm_start_per_gap ? warm_start(c.scenario, c.config, base, gap) : Iterate{};
+    const double cutoff =
+        best.solution.has_solution() ? cutoff_below(best.solution.objective) : kInfinity;
+    GapSolve g =
+        solve_gap(c, gap, warm_start_per_gap ? own_point : point, radius, cutoff, result, base);
+    const LaneChangeSolution& s = g.solution;
+    add_work(work, s);
+    const bool better = s.status == MiqpStatus::Optimal && s.has_solution() &&
+                        (!best.solution.has_solution() || s.objective < best.solution.objective);
+    const bool failed = s.status != MiqpStatus::Infeasible && s.status != MiqpStatus::Cutoff &&
+                        s.status != MiqpStatus::Optimal;
+    if (better || failed) {
+      auto occupancy = occupancy_of(g.qp, s.modes);
+      best = {std::move(g.solution), std::move(occupancy), gap};
+      result.prediction = std::move(g.prediction);
+      if (failed) break;
+    } else if (!best.solution.has_solution()) {
+      // A round that finds nothing reports what its first gap saw.
+      if (gap == gaps.front()) result.prediction = std::move(g.prediction);
+      if (gaps.size() == 1) best.solution.message = s.message;
+    }
+  }
+  if (!best.solution.has_solution() && best.solution.status == MiqpStatus::Infeasible &&
+      gaps.size() > 1) {
+    best.solution.message = "no gap of the target lane is feasible";
+  }
+  best.solution.nodes = work.nodes;
+  best.solution.qp_iterations = work.qp_iterations;
+  best.solution.incumbent_qps = work.incumbent_qps;
+  best.solution.solve_ms = work.solve_ms;
+  return best;
 }
 
 RoundReport report_of(const LaneChangeSolution& s) {
@@ -180,6 +284,7 @@ void fail_round(ExpertResult& result, const LaneChangeSolution& solution) {
 }
 
 void adopt(ExpertResult& result, const RoundSolution& round) {
+  result.gap = round.gap;
   result.path = round.solution.path;
   result.modes = round.solution.modes;
   result.occupancy = round.occupancy;
@@ -195,7 +300,8 @@ void plain_rounds(const RoundContext& c, Iterate point, ExpertResult& result, It
   const ExpertSettings& e = c.config.expert;
   Iterate two_back;  // the solution of the round before the last
   for (int round = 1; round <= e.max_iterations; ++round) {
-    const RoundSolution round_solution = solve_round(c, point, kInfinity, result);
+    const RoundSolution round_solution =
+        solve_round(c, point, kInfinity, result, round == 1 && c.first_point_is_warm_start);
     const LaneChangeSolution& solution = round_solution.solution;
     RoundReport report = report_of(solution);
     if (!solved(solution)) {
@@ -382,7 +488,9 @@ ExpertResult ExpertPlanner::plan(const Scenario& scenario, const PlanLimits& lim
                              limits.time_limit_s,
                              predicted_steps_of(scenario, config),
                              dt,
-                             modes_fit ? hints.modes : nullptr};
+                             modes_fit ? hints.modes : nullptr,
+                             hints.gap,
+                             !hint_path_fits(scenario, hints)};
   ExpertResult result;
   result.prediction = predict_traffic(scenario, config, context.predicted_steps, dt);
   Iterate previous;
@@ -408,7 +516,8 @@ LinearizedRound ExpertPlanner::first_round(const Scenario& scenario, const PlanH
   TrafficPrediction prediction = predict_traffic(scenario, config, predicted_steps, dt);
   LinearizedRound out;
   out.point = first_point(scenario, config, hints, prediction);
-  out.qp = linearized_qp(scenario, config, predicted_steps, dt, out.point, prediction);
+  predict_along(scenario, config, predicted_steps, dt, out.point, prediction);
+  out.qp = build_lane_change_qp(scenario, config, out.point, prediction);
   return out;
 }
 
@@ -476,9 +585,18 @@ Trajectory ExpertPlanner::to_trajectory(const ExpertResult& result,
          {"solve_ms", r.solve_ms}});
     if (std::isfinite(r.trust_radius)) rounds.back()["trust_radius"] = r.trust_radius;
   }
-  t.details = {{"objective", result.objective},      {"iterations", result.iterations()},
-               {"status", to_string(result.status)}, {"solver", solver_->name()},
-               {"linearization_defect", defect},     {"rounds", rounds}};
+  const auto car_name = [](std::optional<Car> c) {
+    return c ? nlohmann::json(lanechange::to_string(*c)) : nlohmann::json();
+  };
+  t.details = {{"objective", result.objective},
+               {"iterations", result.iterations()},
+               {"status", to_string(result.status)},
+               {"solver", solver_->name()},
+               {"linearization_defect", defect},
+               {"gap",
+                {{"behind", car_name(result.gap.car_behind())},
+                 {"ahead", car_name(result.gap.car_ahead())}}},
+               {"rounds", rounds}};
   return t;
 }
 

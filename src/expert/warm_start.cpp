@@ -70,26 +70,20 @@ double quintic_time_at(double level) {
   return 0.5 * (lo + hi);
 }
 
-// The warm start's states: x and speed from a quintic toward a place behind
-// the target, with the given lateral motion (value and rate in t). The
-// caller fills the controls once its states are final.
+// The warm start's states: x and speed from a quintic toward the gap's aim
+// point, with the given lateral motion (value and rate in t). The caller
+// fills the controls once its states are final.
 template <class Lateral>
 Iterate quintic_path(const Scenario& s, const Config& c, const TrafficPrediction& p,
-                     const Lateral& lateral) {
+                     const Lateral& lateral, const Gap& gap) {
   const double T = s.horizon;
   const double dt = T / s.steps;
-  const CarTrack& target = p.car(Car::Target);
-  const int end = std::min(s.steps, p.nodes() - 1);
-  double aim = target.x[end];
-  if (c.expert.aim_behind_target) {
-    const SafeDistance d = s.centre_safe_distances().target;
-    aim -= d.standstill + d.time_headway * std::min(target.v[end], s.limits.v.hi);
-  }
-  const double end_speed = std::clamp(target.v[end], s.limits.v.lo, s.limits.v.hi);
+  const GapAim end_state = aim_into(s, c, p, gap, std::min(s.steps, p.nodes() - 1));
+  const double end_speed = std::clamp(end_state.v, s.limits.v.lo, s.limits.v.hi);
   // A target far behind would make the path run backwards; the guess is only a
   // linearization point, so keep it moving forward.
-  aim = std::max(aim, s.ego.x + 0.5 * (s.ego.v + end_speed) * T * 0.25);
-  const Quintic x(s.ego.x, s.ego.v * std::cos(s.ego.theta), s.ego.a, aim, end_speed, target.a[end],
+  const double aim = std::max(end_state.x, s.ego.x + 0.5 * (s.ego.v + end_speed) * T * 0.25);
+  const Quintic x(s.ego.x, s.ego.v * std::cos(s.ego.theta), s.ego.a, aim, end_speed, end_state.a,
                   T);
   Iterate path;
   for (int k = 0; k <= s.steps; ++k) {
@@ -101,9 +95,10 @@ Iterate quintic_path(const Scenario& s, const Config& c, const TrafficPrediction
   return path;
 }
 
-Iterate quintic_warm_start(const Scenario& s, const Config& c, const TrafficPrediction& p) {
+Iterate quintic_warm_start(const Scenario& s, const Config& c, const TrafficPrediction& p,
+                           const Gap& gap) {
   const Quintic y(s.ego.y, s.ego.v * std::sin(s.ego.theta), 0.0, s.lane_width, 0.0, 0.0, s.horizon);
-  Iterate path = quintic_path(s, c, p, y);
+  Iterate path = quintic_path(s, c, p, y, gap);
   fill_controls(path, s.horizon / s.steps);
   return path;
 }
@@ -161,8 +156,8 @@ Iterate warm_start_for_modes(const Scenario& scenario, const Config& config,
   }
   // Under the either-or rule a node is in one lane or the other.
   if (touches >= 0 && across < 0 && rule == LaneRule::EitherOr) across = touches;
-  Iterate path =
-      quintic_path(scenario, config, prediction, move_timed_to(scenario, touches, across));
+  Iterate path = quintic_path(scenario, config, prediction,
+                              move_timed_to(scenario, touches, across), paper_gap());
   // The flat start would give node 0 no heading; it has the ego's.
   path.states.front() = State(scenario.ego.x, scenario.ego.y, scenario.ego.v, scenario.ego.theta);
   fill_controls(path, scenario.horizon / scenario.steps);
@@ -170,10 +165,15 @@ Iterate warm_start_for_modes(const Scenario& scenario, const Config& config,
 }
 
 Iterate warm_start(const Scenario& scenario, const Config& config,
-                   const TrafficPrediction& prediction) {
+                   const TrafficPrediction& prediction, const Gap& gap) {
   return config.expert.warm_start == WarmStart::Authors
              ? authors_warm_start(scenario, prediction)
-             : quintic_warm_start(scenario, config, prediction);
+             : quintic_warm_start(scenario, config, prediction, gap);
+}
+
+Iterate warm_start(const Scenario& scenario, const Config& config,
+                   const TrafficPrediction& prediction) {
+  return warm_start(scenario, config, prediction, paper_gap());
 }
 
 }  // namespace lanechange::expert

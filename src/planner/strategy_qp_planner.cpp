@@ -13,6 +13,13 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
+// The lane strategies were learned for Eq. 1's gap: their modes are
+// replayed through it.
+Config with_paper_gap(Config config) {
+  config.expert.gap = GapChoice::Fixed;
+  return config;
+}
+
 double ms_since(Clock::time_point start) {
   return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
 }
@@ -69,7 +76,7 @@ StrategyQpPlanner::StrategyQpPlanner(Config config,
                                      std::shared_ptr<const learn::StrategyModel> model)
     : config_(closed_loop_expert(std::move(config))),
       model_(std::move(model)),
-      fixed_(config_, std::make_shared<expert::FixedModeLaneChangeSolver>()),
+      fixed_(with_paper_gap(config_), std::make_shared<expert::FixedModeLaneChangeSolver>()),
       screen_solver_(expert::FixedModeSettings{config_.strategy_qp.rough_screen,
                                                config_.strategy_qp.screen_tolerance}),
       neighbour_screen_solver_(expert::FixedModeSettings{

@@ -55,11 +55,14 @@ double Scenario::bumper_gap(Car which, double dx) const {
 }
 
 SafetyMargins Scenario::centre_safe_distances() const {
-  SafetyMargins d = safe_distance;
-  d.leader.standstill += 0.5 * (size_of(Car::Leader).length - vehicle.length);
-  d.follower.standstill += 0.5 * (size_of(Car::Follower).length - vehicle.length);
-  d.target.standstill += 0.5 * (size_of(Car::Target).length - vehicle.length);
-  return d;
+  return {centre_safe_distance(Car::Leader, safe_distance.leader),
+          centre_safe_distance(Car::Follower, safe_distance.follower),
+          centre_safe_distance(Car::Target, safe_distance.target)};
+}
+
+SafeDistance Scenario::centre_safe_distance(Car which, SafeDistance base) const {
+  base.standstill += 0.5 * (size_of(which).length - vehicle.length);
+  return base;
 }
 
 CarState& Scenario::car(Car which) {

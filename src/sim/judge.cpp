@@ -73,8 +73,8 @@ void traffic_measures(const Trajectory& t, const Scenario& scene, RolloutMetrics
   }
 }
 
-// The gap a lane change ended in tells a like-for-like comparison apart:
-// Eq. 1 lets the expert enter only between the follower and the target.
+// The gap a lane change ended in: Eq. 1's (between the follower and the
+// target), or one of the two that expert.gap = best opens too.
 std::string target_lane_slot(const Trajectory& t, const Scenario& scene) {
   const EgoState& e = t.ego.back();
   if (std::abs(e.y - scene.lane_width) > scene.lane_width / 2.0) return "";

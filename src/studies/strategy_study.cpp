@@ -134,8 +134,11 @@ json run_strategy_study(const StrategyStudyOptions& o,
   o.config.validate();
   // Open loop, as the data were made: the expert plans from the start with
   // the config's own expert.monotone_lateral, not the closed loop's.
+  // Lane strategies are learned for Eq. 1's gap, so the exact plans they
+  // are compared with go through it too.
   Config config = o.config;
   config.closed_loop.monotone_lateral = false;
+  config.expert.gap = GapChoice::Fixed;
   const StrategyQpPlanner planner(config, std::move(model));
   const ScenarioSampler sampler(o.config, o.seed);
   Tally t;

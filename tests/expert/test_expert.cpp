@@ -17,6 +17,7 @@
 namespace lanechange::expert {
 namespace {
 
+using testing::fixed_gap_config;
 using testing::no_gap_scenario;
 using testing::open_road_scenario;
 
@@ -507,7 +508,8 @@ TEST(Planner, AStartInsideTheLeadersSafeDistanceIsTheReasonGiven) {
   ASSERT_EQ(r.status, PlanStatus::Infeasible) << r.reason;
   EXPECT_NE(r.reason.find("inside the leader's safe distance"), std::string::npos) << r.reason;
   // A plan that fails for another cause is not blamed on the start.
-  const ExpertResult other = planner.plan(no_gap_scenario());
+  const ExpertPlanner paper(fixed_gap_config(), std::make_shared<FastLaneChangeSolver>());
+  const ExpertResult other = paper.plan(no_gap_scenario());
   ASSERT_EQ(other.status, PlanStatus::Infeasible);
   EXPECT_EQ(other.reason.find("safe distance"), std::string::npos) << other.reason;
 }
@@ -660,12 +662,120 @@ TEST(FastSolver, ANodeLimitLeavesTheOpenNodesBound) {
 
 TEST(Planner, NoGapIsAFailure) {
   const Scenario s = no_gap_scenario();
-  const ExpertPlanner planner(Config{}, std::make_shared<FastLaneChangeSolver>());
+  const ExpertPlanner planner(fixed_gap_config(), std::make_shared<FastLaneChangeSolver>());
   const ExpertResult r = planner.plan(s);
   EXPECT_EQ(r.status, PlanStatus::Infeasible);
   const Trajectory t = planner.to_trajectory(r, s);
   EXPECT_EQ(t.label, Label::Failure);
   EXPECT_FALSE(t.reason.empty());
+}
+
+// The ego plans with the gap choice and with Eq. 1's gap alone; the first must
+// be well-posed through `expected`, the second must fail.
+void expect_only_the_gap(const Scenario& s, const Gap& expected) {
+  const ExpertPlanner best(Config{}, std::make_shared<FastLaneChangeSolver>());
+  const ExpertResult r = best.plan(s);
+  ASSERT_EQ(r.status, PlanStatus::Converged) << r.reason;
+  EXPECT_EQ(describe(r.gap), describe(expected));
+  const Trajectory t = best.to_trajectory(r, s);
+  EXPECT_EQ(t.label, Label::WellPosed) << t.reason;
+  EXPECT_FALSE(t.collision);
+  EXPECT_EQ(t.details.at("gap").at("behind").is_null(), !expected.car_behind().has_value());
+  expect_audit_passes(t, s, Config{});
+  const ExpertPlanner fixed(fixed_gap_config(), std::make_shared<FastLaneChangeSolver>());
+  const ExpertResult paper = fixed.plan(s);
+  EXPECT_EQ(paper.status, PlanStatus::Infeasible) << paper.reason;
+  EXPECT_EQ(fixed.to_trajectory(paper, s).label, Label::Failure);
+}
+
+// The follower and target too close together to take the ego between them,
+// and both slower than the ego: only the gap ahead of the target is open.
+TEST(Planner, TakesTheOnlyOpenGapAheadOfTheTarget) {
+  Scenario s = open_road_scenario();
+  s.ego.v = 10.0;
+  s.leader = {40.0, 10.0, 0.0};
+  s.follower = {-20.0, 8.0, 0.0};
+  s.target = {-10.0, 8.0, 0.0};
+  validate_scenario(s);
+  expect_only_the_gap(s, {{Car::Follower, Car::Target}, {}});
+}
+
+// Both faster than the ego and too close together: only the gap behind the
+// follower is open.
+TEST(Planner, TakesTheOnlyOpenGapBehindTheFollower) {
+  Scenario s = open_road_scenario();
+  s.ego.v = 10.0;
+  s.leader = {50.0, 10.0, 0.0};
+  s.follower = {5.0, 14.0, 0.0};
+  s.target = {15.0, 14.0, 0.0};
+  validate_scenario(s);
+  expect_only_the_gap(s, {{}, {Car::Follower, Car::Target}});
+}
+
+TEST(Gaps, FixedIsThePapersAndBestListsEveryPlaceFromTheBack) {
+  const Scenario s = open_road_scenario();
+  const std::vector<Gap> fixed = target_lane_gaps(s, GapChoice::Fixed);
+  ASSERT_EQ(fixed.size(), 1U);
+  EXPECT_EQ(fixed[0], paper_gap());
+  const std::vector<Gap> best = target_lane_gaps(s, GapChoice::Best);
+  ASSERT_EQ(best.size(), 3U);
+  EXPECT_EQ(describe(best[0]), "none-follower");
+  EXPECT_EQ(describe(best[1]), "follower-target");
+  EXPECT_EQ(best[1], paper_gap());
+  EXPECT_EQ(describe(best[2]), "target-none");
+  // Order is by position, not by role.
+  Scenario swapped = s;
+  std::swap(swapped.follower, swapped.target);
+  EXPECT_EQ(describe(target_lane_gaps(swapped, GapChoice::Best)[1]), "target-follower");
+}
+
+// Restricted to Eq. 1's gap, the gap-choosing planner gives the fixed
+// planner's answers exactly.
+TEST(Planner, OnlyThePapersGapPlansAsTheFixedGap) {
+  const ScenarioSampler sampler(Config{}, 31);
+  const ExpertPlanner best(Config{}, std::make_shared<FastLaneChangeSolver>());
+  const ExpertPlanner fixed(fixed_gap_config(), std::make_shared<FastLaneChangeSolver>());
+  const Gap gap = paper_gap();
+  PlanHints only_paper;
+  only_paper.gap = &gap;
+  int converged = 0;
+  for (std::uint64_t i = 0; i < 12; ++i) {
+    const Scenario s = sampler.sample(i);
+    const ExpertResult paper = fixed.plan(s);
+    const ExpertResult replay = best.plan(s, {}, only_paper);
+    ASSERT_EQ(replay.status, paper.status) << "scenario " << i;
+    EXPECT_EQ(replay.iterations(), paper.iterations()) << "scenario " << i;
+    if (paper.status != PlanStatus::Converged) continue;
+    ++converged;
+    EXPECT_EQ(replay.objective, paper.objective) << "scenario " << i;
+    EXPECT_EQ(replay.gap, gap);
+  }
+  EXPECT_GT(converged, 0);
+}
+
+TEST(FastSolver, ACutoffAboveTheOptimumKeepsItAndOneBelowCutsTheSearchOff) {
+  const Config config;
+  const ScenarioSampler sampler(config, 29);
+  int checked = 0;
+  for (std::uint64_t i = 0; i < 8; ++i) {
+    const LaneChangeQp qp = first_round_problem(sampler.sample(i), config);
+    const LaneChangeSolution full = FastLaneChangeSolver{}.solve(qp, {});
+    if (full.status != MiqpStatus::Optimal) continue;
+    ++checked;
+    MiqpSettings above;
+    above.objective_cutoff = full.objective + 1.0;
+    const LaneChangeSolution kept = FastLaneChangeSolver{}.solve(qp, above);
+    ASSERT_EQ(kept.status, MiqpStatus::Optimal) << "scenario " << i;
+    EXPECT_NEAR(kept.objective, full.objective, 1e-6 * (1.0 + std::abs(full.objective)));
+    MiqpSettings below;
+    below.objective_cutoff = full.objective - 1e-3 * (1.0 + std::abs(full.objective));
+    const LaneChangeSolution cut = FastLaneChangeSolver{}.solve(qp, below);
+    EXPECT_EQ(cut.status, MiqpStatus::Cutoff) << "scenario " << i << ": " << cut.message;
+    EXPECT_FALSE(cut.has_solution());
+    EXPECT_EQ(cut.best_bound, below.objective_cutoff);
+    EXPECT_LE(cut.nodes, full.nodes);
+  }
+  EXPECT_GT(checked, 0);
 }
 
 TEST(Planner, SampledPlansPassTheAudit) {
@@ -698,7 +808,7 @@ Scenario cycling_scenario() {
 }
 
 TEST(Planner, StopsRoundsThatAlternateBetweenTwoPaths) {
-  Config config;
+  Config config = fixed_gap_config();            // the gap and
   config.expert.lane_rule = LaneRule::EitherOr;  // the rule it was found under
   config.expert.globalisation = Globalisation::Off;
   config.expert.cycle_tolerance = 0.0;
@@ -719,8 +829,9 @@ TEST(Planner, StopsRoundsThatAlternateBetweenTwoPaths) {
   EXPECT_EQ(planner.to_trajectory(early, cycling_scenario()).label, Label::Failure);
 }
 
+// The cycling scenes were found through Eq. 1's gap.
 Config config_with(LaneRule rule, Globalisation globalisation) {
-  Config config;
+  Config config = fixed_gap_config();
   config.expert.lane_rule = rule;
   config.expert.globalisation = globalisation;
   return config;

@@ -138,6 +138,12 @@ inline std::string untimed_config_file(const TempDir& dir) {
 }
 
 /// Every car far away: a wide-open gap in the target lane.
+// The paper's expert: Eq. 1's gap between the follower and the target only.
+inline Config fixed_gap_config(Config config = {}) {
+  config.expert.gap = GapChoice::Fixed;
+  return config;
+}
+
 inline Scenario open_road_scenario(Behavior behavior = Behavior::ConstantSpeed) {
   Scenario s = default_scenario(Config{});
   s.behavior = behavior;
@@ -149,7 +155,9 @@ inline Scenario open_road_scenario(Behavior behavior = Behavior::ConstantSpeed) 
   return s;
 }
 
-// The target lane packed bumper to bumper around the ego: no gap at all.
+// The follower and target bumper to bumper beside the ego: Eq. 1's gap is
+// closed. The gaps behind the follower and ahead of the target stay open, so
+// a test of "no gap" plans with fixed_gap_config().
 inline Scenario no_gap_scenario() {
   Scenario s = open_road_scenario();
   s.follower = {-2.0, 8.0, 0.0};

@@ -87,7 +87,7 @@ TEST(ClosedLoop, TheKeeperTakesOverOnlyWhereItHoldsTheLane) {
 }
 
 TEST(ClosedLoop, NoGapIsAbortedWithoutCollision) {
-  const Config config = testing::untimed_config();
+  const Config config = testing::fixed_gap_config(testing::untimed_config());
   const Scenario s = no_gap();
   for (const char* name : {"miqp", "keep-lane"}) {
     const auto p = planner::make_planner(name, config);
@@ -97,6 +97,21 @@ TEST(ClosedLoop, NoGapIsAbortedWithoutCollision) {
     EXPECT_FALSE(r.trajectory.collision) << name;
     EXPECT_GT(r.metrics.fallbacks, 0) << name;
   }
+}
+
+// Where Eq. 1's gap is closed, the expert that chooses its gap merges into
+// another one, behind the follower or ahead of the target.
+TEST(ClosedLoop, TheExpertTakesAnotherGapWhereThePapersIsClosed) {
+  const Config config = testing::untimed_config();
+  const Scenario s = no_gap();
+  const auto miqp = planner::make_planner("miqp", config);
+  const sim::Rollout r = sim::simulate(s, *miqp, config);
+  testing::expect_consistent(r, s);
+  EXPECT_EQ(r.outcome, Outcome::WellPosed) << r.reason;
+  EXPECT_FALSE(r.trajectory.collision);
+  EXPECT_TRUE(r.metrics.target_lane_slot == "behind_follower" ||
+              r.metrics.target_lane_slot == "ahead_of_target")
+      << r.metrics.target_lane_slot;
 }
 
 TEST(ClosedLoop, SampledRolloutsAreConsistent) {

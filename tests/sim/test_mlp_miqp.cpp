@@ -26,8 +26,9 @@ EgoControl swerve_left(const Observation&) { return {0.0, 0.26}; }
 
 TEST(MlpMiqp, ANetworkSteeringIntoACarIsTakenOverAndNothingIsHit) {
   const Scenario s = testing::no_gap_scenario();
-  const MlpMiqpPlanner p = forced(swerve_left);
-  const sim::Rollout r = sim::simulate(s, p, testing::untimed_config());
+  const Config paper = testing::fixed_gap_config(testing::untimed_config());
+  const MlpMiqpPlanner p = forced(swerve_left, kWorthTrying, paper);
+  const sim::Rollout r = sim::simulate(s, p, paper);
   EXPECT_GE(r.metrics.takeovers, 1);
   const auto first = std::find_if(r.steps.begin(), r.steps.end(), [](const sim::StepRecord& k) {
     return k.status == planner::ActStatus::TookOver;
@@ -80,7 +81,7 @@ TEST(MlpMiqp, AWrongRefusalIsCaughtByTheExpertsCheck) {
 
   // Where the expert finds no plan either, the fallback keeps the lane and
   // the expert checks again every period, no more often.
-  Config sparse = config;
+  Config sparse = testing::fixed_gap_config(config);
   sparse.closed_loop.refusal_check_period = 3;
   const MlpMiqpPlanner checks_every_third = refusing_counter(calls, sparse);
   const sim::Rollout blocked =

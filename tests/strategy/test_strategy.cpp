@@ -94,7 +94,7 @@ TEST(Strategy, LaneModeIndicesFollowTheFormulation) {
 // The round's QP of an exact plan, solved with the plan's own modes fixed,
 // has the exact optimum: the integer part is all the search adds.
 TEST(Strategy, AStrategyFromAnExactPlanGivesBackItsCost) {
-  const Config config;
+  const Config config = testing::fixed_gap_config();  // strategies are Eq. 1's gap's
   const ScenarioSampler sampler(config, 5);
   const expert::FixedModeLaneChangeSolver fixed;
   int compared = 0;
@@ -106,8 +106,8 @@ TEST(Strategy, AStrategyFromAnExactPlanGivesBackItsCost) {
     if (exact.status != PlanStatus::Converged || std::isfinite(exact.rounds.back().trust_radius)) {
       continue;
     }
-    const auto qp =
-        expert::build_lane_change_qp(s, effective_config(config, s), exact.path, exact.prediction);
+    const auto qp = expert::build_lane_change_qp(s, effective_config(config, s), exact.path,
+                                                 exact.prediction, exact.gap);
     const auto best = expert::FastLaneChangeSolver().solve(qp, {});
     ASSERT_EQ(best.status, expert::MiqpStatus::Optimal);
     const auto one = fixed.solve(qp, {}, {nullptr, &best.modes, nullptr});
@@ -145,9 +145,11 @@ TEST(Strategy, AStrategyFromAnExactPlanGivesBackItsCost) {
     EXPECT_NEAR(rough.objective, best.objective, 0.01 * (1.0 + std::abs(best.objective)));
     EXPECT_LT(rough.qp_iterations, one.qp_iterations);
     // The whole plan with the strategy fixed lands where the exact one does.
+    expert::PlanHints its_modes{nullptr, &exact.modes};
+    its_modes.gap = &exact.gap;
     const ExpertResult again =
         ExpertPlanner(config, std::make_shared<expert::FixedModeLaneChangeSolver>())
-            .plan(s, {}, {nullptr, &exact.modes});
+            .plan(s, {}, its_modes);
     ASSERT_EQ(again.status, PlanStatus::Converged) << "scene " << i << ": " << again.reason;
     EXPECT_NEAR(again.objective, exact.objective, 0.01 * std::abs(exact.objective));
     ++compared;
@@ -659,7 +661,7 @@ std::shared_ptr<const learn::StrategyModel> model_from_expert(const Scenario& s,
 // On scenes the model has memorised, the study finds each scene's own
 // strategy first, feasible at the exact cost, and its per-scene records say so.
 TEST(Strategy, TheStudyOnMemorisedScenesFollowsTheirOwnStrategies) {
-  Config config = testing::untimed_config();
+  Config config = testing::fixed_gap_config(testing::untimed_config());
   config.expert.steps = 20;
   config.closed_loop.monotone_lateral = false;  // open loop, as the study plans
   const std::uint64_t seed = 5;
@@ -734,7 +736,7 @@ TEST(Strategy, ClosedLoopChangesLanesIntoAWideOpenGap) {
 }
 
 TEST(Strategy, ClosedLoopStaysInLaneWithoutAGap) {
-  const Config config = testing::untimed_config();
+  const Config config = testing::fixed_gap_config(testing::untimed_config());
   const Scenario s = testing::no_gap_scenario();
   const auto p = std::make_shared<planner::StrategyQpPlanner>(
       config, model_of({testing::open_road_scenario()}, {"0000011111222"}));

@@ -13,6 +13,8 @@
 // Both back-ends solve exactly this: the reference through to_miqp (big-M,
 // one binary per node and mode), our structured solver directly.
 #include <Eigen/Core>
+#include <optional>
+#include <string>
 #include <string_view>
 #include <vector>
 
@@ -93,14 +95,44 @@ struct LaneChangeQp {
 /// (either_or has no both-lanes mode).
 [[nodiscard]] int lane_mode_index(LaneRule rule, LaneOccupancy occupancy);
 
-/// The other cars' positions the lane rows use, node by node.
-struct LaneReferences {
-  std::vector<double> leader_x, follower_x, target_x;
-  std::vector<double> follower_v;
+/// A gap of the target lane, as a split of its cars: the ego ends ahead of
+/// every car in `behind` and behind every car in `ahead`. Each of them keeps
+/// its Eq. 1 distance at every node where the ego is in the target lane, so
+/// the plan stays exact even where the prediction lets cars pass each other.
+struct Gap {
+  std::vector<Car> behind;  ///< nearest last
+  std::vector<Car> ahead;   ///< nearest first
+  /// The cars that frame the gap (none where the gap is open that way).
+  [[nodiscard]] std::optional<Car> car_behind() const;
+  [[nodiscard]] std::optional<Car> car_ahead() const;
+  bool operator==(const Gap&) const = default;
 };
+/// Eq. 1's one gap: between the follower and the target.
+[[nodiscard]] Gap paper_gap();
+/// The gaps config.expert.gap allows, from the back of the target lane:
+/// the paper's alone (fixed), or one per place between, ahead of and behind
+/// the target-lane cars as they stand at t = 0 (best).
+[[nodiscard]] std::vector<Gap> target_lane_gaps(const Scenario& scenario, GapChoice choice);
+/// Where a plan into `gap` aims at prediction node `node`: behind the gap's
+/// car ahead by its safe distance (expert.aim_behind_target; else at it), at
+/// that car's speed and acceleration; ahead of the car behind where the gap
+/// is open in front; at the ego's pace on an empty target lane.
+struct GapAim {
+  double x = 0.0, v = 0.0, a = 0.0;
+};
+[[nodiscard]] GapAim aim_into(const Scenario& scenario, const Config& config,
+                              const TrafficPrediction& prediction, const Gap& gap, int node);
+/// "follower-target", "none-follower", ...: the framing cars, back first.
+[[nodiscard]] std::string describe(const Gap& gap);
 
 /// Builds the round's problem around `point` (its speeds and headings are the
-/// linearization point) with the cars predicted in `prediction`.
+/// linearization point) with the cars predicted in `prediction`, the target
+/// lane's rows those of `gap`.
+[[nodiscard]] LaneChangeQp build_lane_change_qp(const Scenario& scenario, const Config& config,
+                                                const Iterate& point,
+                                                const TrafficPrediction& prediction,
+                                                const Gap& gap);
+/// The same through Eq. 1's gap (paper_gap).
 [[nodiscard]] LaneChangeQp build_lane_change_qp(const Scenario& scenario, const Config& config,
                                                 const Iterate& point,
                                                 const TrafficPrediction& prediction);

@@ -65,8 +65,8 @@ struct MiqpSettings {
   double integer_tolerance = 1e-6;
   double feasibility_tolerance = 1e-8;  ///< of the continuous relaxations
   /// A solve may stop (status Cutoff) once it proves no point is cheaper
-  /// than this: a caller who holds a better answer already. Honoured by the
-  /// fixed-mode solver; the searches ignore it.
+  /// than this: a caller who holds a better answer already. Honoured by our
+  /// solvers (fast and fixed-mode); Bonmin ignores it.
   double objective_cutoff = kInfinity;
   bool verbose = false;
 };

@@ -1,7 +1,9 @@
 #pragma once
 // The expert: successive linearization of the lane-change MIQP (paper Sec. II).
 // Round r linearizes the dynamics about round r-1's solution (the warm start
-// first), re-predicts the cars (IDM reacts to that path), and solves the MIQP.
+// first), re-predicts the cars (IDM reacts to that path), and solves the MIQP
+// exactly over every gap config.expert.gap allows (one MIQP per gap, each cut
+// off by the best found before it).
 // It stops when the largest change of x and y between two rounds' solutions is
 // within the tolerance, or at the round limit. Where those rounds fail (a
 // cycle or the limit), config.expert.globalisation may go on with rounds kept
@@ -50,6 +52,9 @@ struct ExpertResult {
   /// part of the plan, in words that do not depend on the formulation.
   std::vector<std::optional<LaneOccupancy>> occupancy;
   TrafficPrediction prediction;  ///< the cars as the last round saw them
+  /// The gap of the target lane the last round's solution merges into: the
+  /// best of those config.expert.gap allows.
+  Gap gap;
   double objective = kInfinity;  ///< of the last round's MIQP
   std::vector<RoundReport> rounds;
   double total_ms = 0.0;
@@ -77,9 +82,16 @@ struct PlanHints {
   /// plan then warm-starts from this one's last QP, once the session has
   /// advanced it by the steps in between. nullptr: a fresh one per plan.
   LaneChangeWorkspace* workspace = nullptr;
+  /// Plan through this gap alone, whatever config.expert.gap allows: a
+  /// replay of a plan's own modes, which belong to its gap.
+  const Gap* gap = nullptr;
 };
 
-/// The initial guess (config.expert.warm_start) for a scenario.
+/// The initial guess (config.expert.warm_start) for a scenario, aimed into
+/// `gap` (the quintic ends behind its car ahead, at that car's speed).
+[[nodiscard]] Iterate warm_start(const Scenario& scenario, const Config& config,
+                                 const TrafficPrediction& prediction, const Gap& gap);
+/// The same aimed into Eq. 1's gap (paper_gap).
 [[nodiscard]] Iterate warm_start(const Scenario& scenario, const Config& config,
                                  const TrafficPrediction& prediction);
 
