@@ -4,7 +4,8 @@
 // incumbents apart), interior-point iterations and CPU time, then the
 // median and mean plan and the totals. Not a timing claim of its own (the
 // benchmarks make those); it shows which plans and rounds carry the mean.
-//   plan_stats [COUNT=100] [--quiet]
+//   plan_stats [COUNT=100] [--quiet] [--fixed-gap]
+// --fixed-gap plans through Eq. 1's gap alone (expert.gap = fixed).
 #include <time.h>
 
 #include <algorithm>
@@ -41,12 +42,16 @@ struct Totals {
 
 int main(int argc, char** argv) {
   const int count = argc > 1 ? std::atoi(argv[1]) : 100;
-  const bool quiet = argc > 2 && std::strcmp(argv[2], "--quiet") == 0;
+  bool quiet = false;
+  lc::Config config;
+  for (int i = 2; i < argc; ++i) {
+    quiet = quiet || std::strcmp(argv[i], "--quiet") == 0;
+    if (std::strcmp(argv[i], "--fixed-gap") == 0) config.expert.gap = lc::GapChoice::Fixed;
+  }
   if (count < 1) {
     std::fprintf(stderr, "plan_stats: COUNT must be a positive number of scenes\n");
     return 2;
   }
-  const lc::Config config;
   const lc::ScenarioSampler sampler(config, 2026);
   const ex::ExpertPlanner planner(config, std::make_shared<ex::FastLaneChangeSolver>());
   Totals totals;
