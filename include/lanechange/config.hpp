@@ -263,10 +263,6 @@ struct DwaSettings {
   /// Also keep Eq. 1's safe distances (scene.safe_distance) to the target
   /// lane's cars wherever the body is in that lane, as the expert does.
   bool keep_safe_distances = true;
-  /// With keep_safe_distances: enter only the gap between the follower and
-  /// the target, as the expert's problem does (Eq. 1: ahead of the follower,
-  /// behind the target). Off: either side of each car, at its safe distance.
-  bool follower_target_gap = false;
   double desired_speed = 50.0 / 3.6;  ///< m/s the speed term pulls towards
   double goal_preview = 1.5;      ///< s: the heading goal sits this far ahead on the lane centre
   double weight_lateral = 3.0;    ///< per m of |y - goal lane centre| at the rollout's end
@@ -289,10 +285,6 @@ struct LatticeSettings {
   /// Also keep Eq. 1's safe distances (scene.safe_distance) to the target
   /// lane's cars wherever the body is in that lane, as the expert does.
   bool keep_safe_distances = true;
-  /// With keep_safe_distances: enter only the gap between the follower and
-  /// the target, as the expert's problem does (Eq. 1: ahead of the follower,
-  /// behind the target). Off: either side of each car, at its safe distance.
-  bool follower_target_gap = false;
   double max_curvature = 0.2;        ///< 1/m
   double max_heading = 0.35;         ///< rad from the road's direction
   double weight_jerk = 0.1;          ///< per (m/s^3)^2 s, on each axis's jerk integral

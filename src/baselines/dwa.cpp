@@ -101,8 +101,7 @@ class DwaSession final : public planner::PlannerSession {
         const std::vector<EgoState> path =
             constant_control_rollout(o.ego, u, steps, dt, scene.limits);
         if (!stays_on_road(path, scene) || !can_stop_safely(path.back(), cars, scene, s) ||
-            (s.keep_safe_distances &&
-             !keeps_target_lane_distances(path, cars, scene, s.follower_target_gap))) {
+            (s.keep_safe_distances && !keeps_target_lane_distances(path, cars, scene))) {
           continue;
         }
         const double separation = min_separation(path, cars, scene, kClearanceCap);

@@ -167,8 +167,7 @@ std::string candidate_problem(const std::vector<EgoState>& path, const TrafficPr
     if (std::abs(omega) / e.v > settings.max_curvature) return "curvature";
   }
   if (min_separation(path, cars, scene, settings.margin) < settings.margin) return "collision";
-  if (settings.keep_safe_distances &&
-      !keeps_target_lane_distances(path, cars, scene, settings.follower_target_gap)) {
+  if (settings.keep_safe_distances && !keeps_target_lane_distances(path, cars, scene)) {
     return "safe distance";
   }
   return "";

@@ -49,7 +49,7 @@ double min_separation(std::span<const EgoState> path, const TrafficPrediction& c
 }
 
 bool keeps_target_lane_distances(std::span<const EgoState> path, const TrafficPrediction& cars,
-                                 const Scenario& scene, bool follower_target_gap) {
+                                 const Scenario& scene) {
   const int nodes = std::min(static_cast<int>(path.size()), cars.nodes());
   const SafetyMargins margins = scene.centre_safe_distances();
   for (int k = 1; k < nodes; ++k) {
@@ -58,8 +58,6 @@ bool keeps_target_lane_distances(std::span<const EgoState> path, const TrafficPr
     for (const Car c : {Car::Follower, Car::Target}) {
       const auto i = static_cast<std::size_t>(k);
       const double ahead_by = cars.car(c).x[i] - e.x;
-      // The expert's side: the follower behind the ego, the target ahead.
-      if (follower_target_gap && (c == Car::Follower) != (ahead_by < 0)) return false;
       const SafeDistance& d = c == Car::Follower ? margins.follower : margins.target;
       const double needed =
           d.standstill + d.time_headway * (ahead_by >= 0 ? e.v : cars.car(c).v[i]);

@@ -34,10 +34,9 @@ namespace lanechange::baselines {
 /// lane at every node (from node 1: the present cannot change) where the
 /// ego's body reaches into that lane: ahead, standstill + headway x ego
 /// speed; behind, standstill + headway x that car's speed; centre to centre.
-/// With `follower_target_gap`, the ego must also be on the expert's side of
-/// each: ahead of the follower and behind the target.
+/// Either side of each car will do, as the expert's gap choice allows.
 [[nodiscard]] bool keeps_target_lane_distances(std::span<const EgoState> path,
-                                               const TrafficPrediction& cars, const Scenario& scene,
-                                               bool follower_target_gap = false);
+                                               const TrafficPrediction& cars,
+                                               const Scenario& scene);
 
 }  // namespace lanechange::baselines

@@ -172,7 +172,6 @@ void visit_fields(V& v, S& s) requires std::same_as<std::remove_const_t<S>, DwaS
   v("margin", s.margin);
   v("braking_decel", s.braking_decel);
   v("keep_safe_distances", s.keep_safe_distances);
-  v("follower_target_gap", s.follower_target_gap);
   v("desired_speed", s.desired_speed);
   v("goal_preview", s.goal_preview);
   v("weight_lateral", s.weight_lateral);
@@ -192,7 +191,6 @@ void visit_fields(V& v, S& s) requires std::same_as<std::remove_const_t<S>, Latt
   v("desired_speed", s.desired_speed);
   v("margin", s.margin);
   v("keep_safe_distances", s.keep_safe_distances);
-  v("follower_target_gap", s.follower_target_gap);
   v("max_curvature", s.max_curvature);
   v("max_heading", s.max_heading);
   v("weight_jerk", s.weight_jerk);

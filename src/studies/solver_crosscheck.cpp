@@ -58,7 +58,8 @@ Case parse_stored_case(const std::string& line, long long line_number, std::uint
     if (!row.contains("config")) {
       throw InputError(where, "carries no \"config\" (the config the case was made with)");
     }
-    c.config = config_from_json(row.at("config"));
+    // Only the expert's part: a planner's options do not touch the MIQP.
+    c.config = config_from_json(expert_data_config(row.at("config")));
     c.index = row.at("index").get<std::uint64_t>();
     c.seed = row.value("seed", seed);
     c.steps = row.value("steps", steps);

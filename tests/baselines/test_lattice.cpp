@@ -104,7 +104,8 @@ TEST(Lattice, ACandidateIntoACarIsInvalid) {
   EXPECT_GT(into_target_lane, 0);
 }
 
-TEST(SafeDistances, TheExpertsGapRefusesTheSideAheadOfTheTarget) {
+// Either side of each target-lane car will do, at its Eq. 1 distance.
+TEST(SafeDistances, HoldOnEitherSideOfEachCar) {
   Scenario s = testing::open_road_scenario();
   s.target = {-30.0, 8.0, 0.0};  // far behind the ego, in the target lane
   s.follower = {-60.0, 8.0, 0.0};
@@ -114,12 +115,14 @@ TEST(SafeDistances, TheExpertsGapRefusesTheSideAheadOfTheTarget) {
   std::vector<EgoState> path;
   for (int k = 0; k <= 10; ++k) path.push_back({8.0 * 0.1 * k, s.lane_width, 8.0, 0.0, 0.0});
   EXPECT_TRUE(baselines::keeps_target_lane_distances(path, cars, s));
-  EXPECT_FALSE(baselines::keeps_target_lane_distances(path, cars, s, true));
-  // Between the two, at their safe distances, both rules agree.
+  // Between the two, at their safe distances.
   s.target = {40.0, 8.0, 0.0};
   const auto between = baselines::predict_from(observe(s), config, 10);
   EXPECT_TRUE(baselines::keeps_target_lane_distances(path, between, s));
-  EXPECT_TRUE(baselines::keeps_target_lane_distances(path, between, s, true));
+  // Ahead of the target by less than 8.4 m + 0.5 s x its speed.
+  s.target = {-8.0, 8.0, 0.0};
+  const auto close_behind = baselines::predict_from(observe(s), config, 10);
+  EXPECT_FALSE(baselines::keeps_target_lane_distances(path, close_behind, s));
 }
 
 TEST(Lattice, BadSettingsAreInputErrors) {
