@@ -190,6 +190,14 @@ std::string title_of(const Trajectory& tr) {
                       "    label: " + std::string(to_string(tr.label));
   if (!tr.reason.empty()) title += "    reason: " + tr.reason;
   if (tr.collision) title += "    (collision)";
+  // The expert's plan names the gap it merges into by the cars around it.
+  if (const auto gap = tr.details.find("gap"); gap != tr.details.end() && gap->is_object()) {
+    const auto name = [&gap](const char* side) {
+      const auto car = gap->find(side);
+      return car != gap->end() && car->is_string() ? car->get<std::string>() : std::string("none");
+    };
+    title += "    gap: " + name("behind") + " - " + name("ahead");
+  }
   return title;
 }
 

@@ -191,6 +191,16 @@ TEST(PlotScript, TitleNamesPlannerLabelAndReasonSafelyQuoted) {
             std::string::npos);
 }
 
+TEST(PlotScript, TitleNamesTheGapAPlanTook) {
+  Trajectory tr = lane_change();
+  tr.details["gap"] = {{"behind", "target"}, {"ahead", nullptr}};
+  const std::string title = line_with(trajectory_plot_script(tr, "p.png"), "set title");
+  EXPECT_NE(title.find("gap: target - none"), std::string::npos) << title;
+  tr.details.erase("gap");
+  EXPECT_EQ(line_with(trajectory_plot_script(tr, "p.png"), "set title").find("gap:"),
+            std::string::npos);
+}
+
 TEST(PlotScript, PathAndRangesCoverTheWholeTrajectory) {
   const std::string script = trajectory_plot_script(lane_change(), "out.png");
   const auto begin = script.find("$ego_path << EOD\n");
