@@ -17,7 +17,7 @@ namespace lanechange {
 struct Collision {
   int node = 0;       ///< first node (or the node before the first sub-sample) in contact
   double time = 0.0;  ///< s
-  Car car = Car::Leader;
+  CarIndex car = 0;
 };
 
 /// The first contact between the ego (poses at the nodes, oriented boxes) and

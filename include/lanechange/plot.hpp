@@ -1,6 +1,6 @@
 #pragma once
 // A picture of a plan or rollout: the two-lane road, the ego's path, and all
-// four cars at a few evenly spaced instants, drawn by gnuplot (pngcairo).
+// cars at a few evenly spaced instants, drawn by gnuplot (pngcairo).
 //
 // gnuplot (5.4 or later, with the pngcairo terminal: Debian's gnuplot-nox) is
 // found at run time: $LANECHANGE_GNUPLOT if set and not empty, else `gnuplot`
@@ -15,7 +15,7 @@
 namespace lanechange {
 
 struct PlotOptions {
-  /// The trajectory file does not store the car size, so the caller supplies it.
+  /// The ego's body, which a trajectory does not store (it does the others').
   VehicleSize vehicle;
   int snapshots = 5;  ///< instants at which the cars are drawn, from the first to the last node
   int width_px = 1400;
@@ -49,13 +49,13 @@ void render_png(const std::function<std::string(const std::string&)>& script_for
 namespace lanechange {
 
 struct AnimationOptions {
-  VehicleSize vehicle;        ///< the trajectory file does not store the car size
+  VehicleSize vehicle;        ///< the ego's body: a trajectory stores only the others'
   double view_length = 90.0;  ///< m of road in view; the view follows the ego
   double speedup = 1.0;       ///< playback speed against real time
   int width_px = 1200;
 };
 
-/// An animated SVG of a plan or rollout: the road, the four cars moving as
+/// An animated SVG of a plan or rollout: the road, every car moving as
 /// recorded (the ego turning with its heading), the ego's path, take-over
 /// and fallback steps marked, and a clock bar. Plays in any web browser
 /// (SMIL animation); needs no program to make. InputError for a malformed

@@ -1,18 +1,22 @@
 #pragma once
-// A lane-change scenario (spec/formats.md, "lanechange.scenario/1"): the ego,
-// the leader in its lane, and the follower and target (leader) in the lane to
-// its left. x is along the road, y across it; x and y locate a car's centre.
+// A lane-change scenario (docs/scenarios.md): the ego and any number of other
+// cars on a two-lane road, the ego lane centred at y = 0 and the target lane
+// to its left at y = lane_width. x is along the road, y across it; x and y
+// locate a car's centre. Format 1 holds the paper's three cars; format 2 any.
 #include <array>
+#include <cstddef>
 #include <nlohmann/json_fwd.hpp>
 #include <optional>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "lanechange/config.hpp"
 
 namespace lanechange {
 
 inline constexpr std::string_view kScenarioFormat = "lanechange.scenario/1";
+inline constexpr std::string_view kScenarioFormatCars = "lanechange.scenario/2";
 
 enum class Behavior { ConstantSpeed, ConstantAccel, Idm };
 
@@ -36,17 +40,40 @@ struct CarState {
   double a = 0.0;
 };
 
-enum class Car { Leader, Follower, Target };
-inline constexpr Car kAllCars[] = {Car::Leader, Car::Follower, Car::Target};
-[[nodiscard]] std::string_view to_string(Car car);
+enum class Lane { Ego, Target };
+[[nodiscard]] std::string_view to_string(Lane lane);
+
+/// The paper's three cars: the car ahead of the ego in its lane, and the two
+/// that frame Eq. 1's gap in the target lane. A scene of any size may give
+/// each role to one of its cars.
+enum class Role { Leader, Follower, Target };
+inline constexpr Role kRoles[] = {Role::Leader, Role::Follower, Role::Target};
+[[nodiscard]] std::string_view to_string(Role role);
+
+/// A car's place in Scenario::cars, and in every list of cars made from a
+/// scene (observations, predictions, trajectories).
+using CarIndex = std::size_t;
+
+/// Another car: it keeps to its lane and moves by its behavior.
+struct OtherCar {
+  std::string id;
+  Lane lane = Lane::Target;
+  CarState state;
+  Behavior behavior = Behavior::ConstantSpeed;
+  /// Its own body where the scene gives one (recorded traffic: trucks,
+  /// vans); absent, the car has the scene's `vehicle`, as the ego does.
+  std::optional<VehicleSize> size;
+};
 
 struct Scenario {
   double lane_width = 3.75;
+  /// The scene's behavior: every car's in format 1, the default of a car
+  /// that names none in format 2, and the class the tables group by.
   Behavior behavior = Behavior::ConstantSpeed;
   EgoState ego;
-  CarState leader;
-  CarState follower;
-  CarState target;
+  std::vector<OtherCar> cars;
+  /// Which car plays each role (Role order); none where no car does.
+  std::array<std::optional<CarIndex>, 3> roles;
   // The optional fields of the format, filled from the config when absent.
   double horizon = 5.0;
   int steps = 50;
@@ -54,45 +81,84 @@ struct Scenario {
   IdmParameters idm;
   SafetyMargins safe_distance;
   Limits limits;
-  /// A car's own body where the scene gives one (recorded traffic: trucks,
-  /// vans); absent, the car has `vehicle`'s, as the ego does.
-  std::array<std::optional<VehicleSize>, 3> car_size;
 
-  [[nodiscard]] const CarState& car(Car which) const;
-  [[nodiscard]] VehicleSize size_of(Car which) const;
+  [[nodiscard]] std::size_t car_count() const { return cars.size(); }
+  /// The scene's behavior, given to every car.
+  void set_behavior(Behavior b);
+  [[nodiscard]] const CarState& car(CarIndex which) const { return cars.at(which).state; }
+  [[nodiscard]] CarState& car(CarIndex which) { return cars.at(which).state; }
+  [[nodiscard]] bool has(Role role) const { return roles[index(role)].has_value(); }
+  /// A leader, a follower and a target: what the paper's parts read.
+  [[nodiscard]] bool has_every_role() const {
+    return has(Role::Leader) && has(Role::Follower) && has(Role::Target);
+  }
+  /// The car of a role; throws std::logic_error where no car has it.
+  [[nodiscard]] CarIndex index_of(Role role) const;
+  [[nodiscard]] const CarState& car(Role role) const { return car(index_of(role)); }
+  [[nodiscard]] CarState& car(Role role) { return car(index_of(role)); }
+  [[nodiscard]] const CarState& leader() const { return car(Role::Leader); }
+  [[nodiscard]] const CarState& follower() const { return car(Role::Follower); }
+  [[nodiscard]] const CarState& target() const { return car(Role::Target); }
+  [[nodiscard]] CarState& leader() { return car(Role::Leader); }
+  [[nodiscard]] CarState& follower() { return car(Role::Follower); }
+  [[nodiscard]] CarState& target() { return car(Role::Target); }
+  [[nodiscard]] VehicleSize size_of(CarIndex which) const;
+  [[nodiscard]] VehicleSize size_of(Role role) const { return size_of(index_of(role)); }
   /// Bumper to bumper between the ego and a car whose centre is dx ahead
   /// (negative: behind) of the ego's.
-  [[nodiscard]] double bumper_gap(Car which, double dx) const;
-  /// Eq. 1's distances, centre to centre. `safe_distance` is set for a car
-  /// of the ego's length; a longer car's centre sits further from its
-  /// bumper, so its standstill distance grows by half the difference.
+  [[nodiscard]] double bumper_gap(CarIndex which, double dx) const;
+  /// One of Eq. 1's distances, `base`, centre to centre to `which`.
+  /// `safe_distance` is set for a car of the ego's length; a longer car's
+  /// centre sits further from its bumper, so its standstill distance grows by
+  /// half the difference.
+  [[nodiscard]] SafeDistance centre_safe_distance(CarIndex which, SafeDistance base) const;
+  /// Eq. 1's distances to the cars of the three roles, as above; a role no
+  /// car has keeps `safe_distance`'s.
   [[nodiscard]] SafetyMargins centre_safe_distances() const;
-  /// One of Eq. 1's distances, `base`, centre to centre to `which`, as above.
-  [[nodiscard]] SafeDistance centre_safe_distance(Car which, SafeDistance base) const;
-  [[nodiscard]] CarState& car(Car which);
-  /// Lane centre of a car: 0 for the leader, lane_width for the others.
-  [[nodiscard]] double lane_center(Car which) const;
+  /// Lane centre: 0 for the ego lane, lane_width for the target lane.
+  [[nodiscard]] double lane_center(Lane lane) const;
+  [[nodiscard]] double lane_center(CarIndex which) const {
+    return lane_center(cars.at(which).lane);
+  }
+  /// The index of a car with this id, if any.
+  [[nodiscard]] std::optional<CarIndex> find(std::string_view id) const;
   /// The ego's speed bounds at time t of a plan. An ego that starts outside
   /// limits.v (recorded traffic) meets them from the first moment full
   /// braking or acceleration can reach them; inside them, limits.v.
   [[nodiscard]] Interval speed_bounds_at(double t) const;
+
+ private:
+  static constexpr std::size_t index(Role role) { return static_cast<std::size_t>(role); }
 };
 
-/// A scenario with every optional field taken from `defaults`.
+/// A scenario with every optional field taken from `defaults`, and no cars.
 [[nodiscard]] Scenario default_scenario(const Config& defaults);
+/// default_scenario plus the paper's three cars (ids "leader", "follower",
+/// "target", in Role order and with those roles), all at x = 0: the shape of
+/// a format-1 scene, for the caller to place.
+[[nodiscard]] Scenario three_car_scenario(const Config& defaults);
 
-/// Parses and validates. Throws InputError naming the field for every bad
-/// input of formats.md: a missing field, an unknown behavior, a non-finite
-/// number, a negative speed or lane width, or cars that overlap at t = 0.
+/// The car that plays `role` by the cars' places at t = 0: the nearest car
+/// ahead of the ego in its lane (leader), and the cars of the target lane
+/// nearest behind (follower) and ahead of (target) the ego's centre.
+[[nodiscard]] std::optional<CarIndex> nearest_in_role(const Scenario& scene, Role role);
+
+/// Parses and validates either format. Throws InputError naming the field
+/// for every bad input of docs/scenarios.md: a missing or unknown field, an
+/// unknown behavior, a non-finite number, a negative speed or lane width, or
+/// cars that overlap at t = 0.
 [[nodiscard]] Scenario scenario_from_json(const nlohmann::json& in, const Config& defaults);
 [[nodiscard]] Scenario scenario_from_text(const std::string& text, const Config& defaults);
 [[nodiscard]] Scenario load_scenario(const std::string& path, const Config& defaults);
 
-/// Writes every field, the optional ones included.
+/// Writes every field, the optional ones included: format 1 for a scene that
+/// format 1 can hold (the three cars of three_car_scenario, all of the
+/// scene's behavior), else format 2.
 [[nodiscard]] nlohmann::json scenario_to_json(const Scenario& scenario);
 void save_scenario(const Scenario& scenario, const std::string& path);
 
-/// Physical checks that do not depend on the JSON: speeds, geometry, overlap.
+/// Physical checks that do not depend on the JSON: speeds, geometry, overlap,
+/// unique ids, and roles that fit their cars' lanes and places.
 void validate_scenario(const Scenario& scenario);
 
 /// The config with the scenario's own lane width, horizon, vehicle, IDM,

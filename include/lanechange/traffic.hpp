@@ -3,7 +3,6 @@
 // at traffic_max_speed when speeding up, if the config sets one) or the
 // Intelligent Driver Model. The same step
 // serves a planner's prediction and the closed-loop simulation.
-#include <array>
 #include <vector>
 
 #include "lanechange/config.hpp"
@@ -38,26 +37,31 @@ class TrafficModel {
  public:
   TrafficModel(const Scenario& scenario, const Config& config);
 
-  /// Advances the three cars by dt. Under IDM each car follows the nearest
-  /// car ahead in its lane, the ego included once its body is in that lane.
-  /// The returned accelerations are those applied during the step.
+  /// Advances every car by dt, each by its own behavior. An IDM car follows
+  /// the nearest car ahead in its lane, the ego included once its body is in
+  /// that lane. A car's `a` is the acceleration applied during the step.
   void step(double dt, const EgoFootprint& ego);
 
-  [[nodiscard]] const CarState& car(Car which) const { return cars_[index(which)]; }
+  [[nodiscard]] const CarState& car(CarIndex which) const { return cars_[which]; }
+  [[nodiscard]] const std::vector<CarState>& cars() const { return cars_; }
+  [[nodiscard]] std::size_t car_count() const { return cars_.size(); }
   [[nodiscard]] double time() const { return time_; }
 
  private:
-  static constexpr std::size_t index(Car c) { return static_cast<std::size_t>(c); }
-  [[nodiscard]] double idm_accel_of(Car which, const EgoFootprint& ego) const;
+  [[nodiscard]] double idm_accel_of(CarIndex which, const EgoFootprint& ego) const;
+  void advance_idm(CarState& car, double dt) const;
 
-  Behavior behavior_;
   double lane_width_;
   VehicleSize vehicle_;  ///< the ego's body
   IdmParameters idm_;
   double speed_cap_;  ///< +infinity without a cap
   TrafficIntegration integration_;
-  std::array<double, 3> length_;  ///< each car's
-  std::array<CarState, 3> cars_;
+  // Per car, in the scene's order; sized once.
+  std::vector<Behavior> behavior_;
+  std::vector<double> lane_center_;
+  std::vector<double> length_;
+  std::vector<CarState> cars_;
+  std::vector<double> accel_;  ///< this step's IDM accelerations, before any car moves
   double time_ = 0.0;
 };
 
@@ -68,13 +72,14 @@ struct CarTrack {
   std::vector<double> a;  ///< applied from node k to k + 1; the last repeats
 };
 
+/// Every car of a scene over the same grid, in the scene's order.
 struct TrafficPrediction {
   double dt = 0.0;
-  std::array<CarTrack, 3> cars;
-  [[nodiscard]] const CarTrack& car(Car which) const {
-    return cars[static_cast<std::size_t>(which)];
-  }
-  [[nodiscard]] int nodes() const { return static_cast<int>(cars[0].x.size()); }
+  std::vector<CarTrack> cars;
+  [[nodiscard]] const CarTrack& car(CarIndex which) const { return cars[which]; }
+  [[nodiscard]] std::size_t car_count() const { return cars.size(); }
+  /// Nodes per track; 0 without cars.
+  [[nodiscard]] int nodes() const { return cars.empty() ? 0 : static_cast<int>(cars[0].x.size()); }
 };
 
 /// Predicts `steps` steps of dt. Under IDM, `ego_path` (node positions, at

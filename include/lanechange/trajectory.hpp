@@ -11,7 +11,19 @@
 
 namespace lanechange {
 
-inline constexpr std::string_view kTrajectoryFormat = "lanechange.trajectory/1";
+inline constexpr std::string_view kTrajectoryFormat = "lanechange.trajectory/2";
+/// The earlier format, read still: the paper's three cars, keyed by role.
+inline constexpr std::string_view kTrajectoryFormatThreeCars = "lanechange.trajectory/1";
+
+/// Who a track of Trajectory::others is.
+struct TrackedCar {
+  std::string id;
+  Lane lane = Lane::Target;
+  VehicleSize size;
+};
+
+/// The scene's cars as a trajectory names them.
+[[nodiscard]] std::vector<TrackedCar> tracked_cars(const Scenario& scenario);
 
 struct Trajectory {
   std::string planner;
@@ -22,6 +34,7 @@ struct Trajectory {
   std::vector<EgoState> ego;         ///< one per node; ego[k].a is applied from t[k]
   std::vector<EgoControl> controls;  ///< one per node; the last repeats the one before
   TrafficPrediction others;          ///< predicted (plan) or simulated (rollout)
+  std::vector<TrackedCar> cars;      ///< who each track of `others` is
   bool collision = false;
   double compute_total_ms = 0.0;
   double compute_max_step_ms = 0.0;

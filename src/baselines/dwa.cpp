@@ -35,7 +35,7 @@ double sample(const Interval& range, int i, int count) {
 bool can_stop_safely(const EgoState& end, const TrafficPrediction& cars, const Scenario& scene,
                      const DwaSettings& s) {
   const auto last = static_cast<std::size_t>(cars.nodes() - 1);
-  for (const Car c : kAllCars) {
+  for (CarIndex c = 0; c < cars.car_count(); ++c) {
     const double center = scene.lane_center(c);
     if (!body_in_lane(end.y, scene.vehicle.width, center, scene.lane_width)) continue;
     const double ahead_by = cars.car(c).x[last] - end.x;

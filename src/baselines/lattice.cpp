@@ -52,7 +52,7 @@ std::vector<double> end_speeds(double speed, const Limits& limits, const Lattice
 // The car to follow in the lane of an end offset: the nearest one ahead of
 // the ego now, with its safe distance of Eq. 1.
 struct Followed {
-  Car car;
+  CarIndex car;
   SafeDistance distance;
 };
 
@@ -61,10 +61,8 @@ std::optional<Followed> followed_car(const planner::Observation& o, double end_o
   const bool target_lane = end_offset > scene.lane_width / 2.0;
   const auto ahead = planner::car_ahead(o, target_lane);
   if (!ahead) return std::nullopt;
-  const SafetyMargins m = scene.centre_safe_distances();
-  const SafeDistance& d = ahead->car == Car::Leader   ? m.leader
-                          : ahead->car == Car::Target ? m.target
-                                                      : m.follower;
+  const SafeDistance d = scene.centre_safe_distance(
+      ahead->car, target_lane ? scene.safe_distance.target : scene.safe_distance.leader);
   return Followed{ahead->car, d};
 }
 

@@ -3,7 +3,9 @@
 #include <algorithm>
 #include <cmath>
 #include <coin/IpSolveStatistics.hpp>
+#include <limits>
 #include <mutex>
+#include <optional>
 
 #include "expert/coin_glue.hpp"
 #include "lanechange/expert/bonmin_solver.hpp"
@@ -49,7 +51,7 @@ void add_obstacles(MpcProblemData& data, const Scenario& scene, const TrafficPre
   const auto nodes = static_cast<std::size_t>(data.steps) + 1;
   data.obstacles.assign(nodes, {});
   data.pruned.assign(nodes, {});
-  for (const Car c : kAllCars) {
+  for (CarIndex c = 0; c < scene.car_count(); ++c) {
     const VehicleSize size = scene.size_of(c);
     const Circles circles = body_circles(size, settings.circles);
     const double clearance = data.ego_radius + circles.radius + settings.margin;
@@ -66,18 +68,24 @@ void add_obstacles(MpcProblemData& data, const Scenario& scene, const TrafficPre
   }
 }
 
-// The terminal set of the expert's fixed y(t_f) = w, placed in the gap: at
-// least the follower's safe distance ahead of it, and the target's behind it
-// (Eq. 1 at the last node).
+// The terminal set of the expert's fixed y(t_f) = w, placed in Eq. 1's gap:
+// at least the follower's safe distance ahead of it, and the target's behind
+// it (Eq. 1 at the last node); open on a side the scene has no car.
 void add_terminal_gap(MpcProblemData& data, const Scenario& scene, const TrafficPrediction& cars) {
   const std::size_t end = static_cast<std::size_t>(data.steps);
-  const CarTrack& follower = cars.car(Car::Follower);
-  const CarTrack& target = cars.car(Car::Target);
   const SafetyMargins safe = scene.centre_safe_distances();
+  constexpr double kOpen = std::numeric_limits<double>::infinity();  // Ipopt: no bound
   data.terminal_gap = true;
-  data.gap_rear =
-      follower.x[end] + safe.follower.standstill + safe.follower.time_headway * follower.v[end];
-  data.gap_front = target.x[end] - safe.target.standstill;
+  data.gap_rear = -kOpen;
+  data.gap_front = kOpen;
+  if (scene.has(Role::Follower)) {
+    const CarTrack& follower = cars.car(scene.index_of(Role::Follower));
+    data.gap_rear =
+        follower.x[end] + safe.follower.standstill + safe.follower.time_headway * follower.v[end];
+  }
+  if (scene.has(Role::Target)) {
+    data.gap_front = cars.car(scene.index_of(Role::Target)).x[end] - safe.target.standstill;
+  }
   data.target_headway = safe.target.time_headway;
 }
 
@@ -183,11 +191,25 @@ namespace {
 double accel_into_gap(const Scenario& scene) {
   const double t = scene.horizon;
   const SafetyMargins safe = scene.centre_safe_distances();
-  const CarState& f = scene.follower;
-  const CarState& g = scene.target;
-  const double rear = f.x + f.v * t + safe.follower.standstill + safe.follower.time_headway * f.v;
-  const double front = g.x + g.v * t - safe.target.standstill - safe.target.time_headway * g.v;
-  const double aim = 0.5 * (rear + front);
+  const double cruise = scene.ego.x + scene.ego.v * t;
+  double aim = cruise;
+  std::optional<double> rear;
+  std::optional<double> front;
+  if (scene.has(Role::Follower)) {
+    const CarState& f = scene.follower();
+    rear = f.x + f.v * t + safe.follower.standstill + safe.follower.time_headway * f.v;
+  }
+  if (scene.has(Role::Target)) {
+    const CarState& g = scene.target();
+    front = g.x + g.v * t - safe.target.standstill - safe.target.time_headway * g.v;
+  }
+  if (rear && front) {
+    aim = 0.5 * (*rear + *front);
+  } else if (rear) {
+    aim = std::max(*rear, cruise);
+  } else if (front) {
+    aim = std::min(*front, cruise);
+  }
   const double wanted = 2.0 * (aim - scene.ego.x - scene.ego.v * t) / (t * t);
   const double v_lo = (scene.limits.v.lo - scene.ego.v) / t;
   const double v_hi = (scene.limits.v.hi - scene.ego.v) / t;

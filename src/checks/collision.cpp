@@ -23,7 +23,7 @@ std::optional<Collision> first_collision(std::span<const EgoState> ego,
       const EgoState& b = ego[std::min(k + 1, nodes - 1)];
       const OrientedBox ego_box{lerp(a.x, b.x, s), lerp(a.y, b.y, s), lerp(a.theta, b.theta, s),
                                 length, width};
-      for (Car car : kAllCars) {
+      for (CarIndex car = 0; car < others.car_count(); ++car) {
         const CarTrack& track = others.car(car);
         const double x = lerp(track.x[k], track.x[std::min(k + 1, nodes - 1)], s);
         const VehicleSize size = scenario.size_of(car);

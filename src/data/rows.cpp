@@ -19,9 +19,13 @@ const std::vector<std::string>& scene_columns() {
   return columns;
 }
 
+// The data set's rows are the paper's: its three cars, by role.
 std::array<double, 14> scene_values(const Scenario& s) {
-  return {s.ego.x,    s.ego.y,      s.ego.v,      s.ego.theta,  s.ego.a,    s.leader.x, s.leader.v,
-          s.leader.a, s.follower.x, s.follower.v, s.follower.a, s.target.x, s.target.v, s.target.a};
+  const CarState& l = s.leader();
+  const CarState& f = s.follower();
+  const CarState& g = s.target();
+  return {s.ego.x, s.ego.y, s.ego.v, s.ego.theta, s.ego.a, l.x, l.v,
+          l.a,     f.x,     f.v,     f.a,         g.x,     g.v, g.a};
 }
 
 std::string join(const std::vector<std::string>& columns) {
@@ -58,9 +62,9 @@ std::string scene_text(const Scenario& s) {
 
 // The other cars at node k as the plan saw them: what the action network
 // observes of the traffic while it drives.
-void put_traffic(std::string& out, const TrafficPrediction& others, int k) {
-  for (const Car car : {Car::Leader, Car::Follower, Car::Target}) {
-    const CarTrack& track = others.car(car);
+void put_traffic(std::string& out, const Scenario& s, const TrafficPrediction& others, int k) {
+  for (const Role role : kRoles) {
+    const CarTrack& track = others.car(s.index_of(role));
     const auto at = static_cast<std::size_t>(k);
     for (const auto* series : {&track.x, &track.v, &track.a}) {
       put(out, at < series->size() ? (*series)[at] : std::nan(""));
@@ -68,8 +72,8 @@ void put_traffic(std::string& out, const TrafficPrediction& others, int k) {
   }
 }
 
-void put_samples(std::string& out, std::uint64_t index, const std::string& scene,
-                 const PlanOutcome& outcome) {
+void put_samples(std::string& out, std::uint64_t index, const Scenario& scenario,
+                 const std::string& scene, const PlanOutcome& outcome) {
   const Trajectory& t = outcome.trajectory;
   for (int k = 0; k < t.nodes(); ++k) {
     const EgoState& z = t.ego[k];
@@ -79,7 +83,7 @@ void put_samples(std::string& out, std::uint64_t index, const std::string& scene
     put(out, t.t[k]);
     out += scene;
     for (double v : {z.x, z.y, z.v, z.theta, t.controls[k].a, t.controls[k].omega}) put(out, v);
-    put_traffic(out, t.others, k);
+    put_traffic(out, scenario, t.others, k);
     const auto at = static_cast<std::size_t>(k);
     const int lanes = at < outcome.lane_modes.size() ? outcome.lane_modes[at] : -1;
     out += ',';
@@ -156,7 +160,7 @@ ScenarioRows scenario_rows(std::uint64_t index, std::uint64_t sub_seed, const Sc
   put(out, static_cast<std::uint64_t>(outcome.trajectory.nodes()));
   put(out, run::csv_field(outcome.reason));
   out += '\n';
-  put_samples(rows.samples, index, scene, outcome);
+  put_samples(rows.samples, index, scenario, scene, outcome);
   rows.timing += std::to_string(index);
   put(rows.timing, outcome.solve_ms);
   rows.timing += '\n';

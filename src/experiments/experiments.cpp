@@ -176,8 +176,8 @@ std::vector<ExampleScene> example_scenes(const Context& c, const std::vector<sim
   for (const auto& r : rows) {
     if (r.planner != "miqp" || !r.success()) continue;
     const Scenario s = eval_scene(c, r.behavior, r.index);
-    const double gap = s.target.x - s.follower.x -
-                       0.5 * (s.size_of(Car::Target).length + s.size_of(Car::Follower).length);
+    const double gap = s.target().x - s.follower().x -
+                       0.5 * (s.size_of(Role::Target).length + s.size_of(Role::Follower).length);
     if (gap < tightest) {
       tightest = gap;
       congested = {"congested", r.behavior, r.index, "the tightest gap the expert masters"};

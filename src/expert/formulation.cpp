@@ -65,8 +65,9 @@ HalfSpace row(double gx, double gy, double gv, double upper, double gtheta = 0.0
   return h;
 }
 
-// The rows of Eq. 1 at one node, against the cars' positions there: the
-// leader's in the ego lane, the gap's in the target lane.
+// The rows of Eq. 1 at one node, against the cars' positions there: in the
+// ego lane, behind every car ahead of the ego at t = 0 and ahead of every car
+// behind it (the lane keeps its order); in the target lane, those of the gap.
 struct CarRows {
   std::vector<HalfSpace> ego_lane, target_lane;
 };
@@ -84,13 +85,21 @@ HalfSpace ahead_of(const SafeDistance& d, double car_x, double car_v) {
 CarRows car_rows(const Scenario& s, const TrafficPrediction& p, int index, const Gap& gap) {
   CarRows r;
   const auto at = static_cast<std::size_t>(index);
-  r.ego_lane.push_back(behind(s.centre_safe_distance(Car::Leader, s.safe_distance.leader),
-                              p.car(Car::Leader).x[at]));
-  for (const Car c : gap.behind) {
+  for (CarIndex c = 0; c < s.car_count(); ++c) {
+    if (s.cars[c].lane != Lane::Ego) continue;
+    if (s.car(c).x > s.ego.x) {
+      const SafeDistance d = s.centre_safe_distance(c, s.safe_distance.leader);
+      r.ego_lane.push_back(behind(d, p.car(c).x[at]));
+    } else {
+      const SafeDistance d = s.centre_safe_distance(c, s.safe_distance.follower);
+      r.ego_lane.push_back(ahead_of(d, p.car(c).x[at], p.car(c).v[at]));
+    }
+  }
+  for (const CarIndex c : gap.behind) {
     const SafeDistance d = s.centre_safe_distance(c, s.safe_distance.follower);
     r.target_lane.push_back(ahead_of(d, p.car(c).x[at], p.car(c).v[at]));
   }
-  for (const Car c : gap.ahead) {
+  for (const CarIndex c : gap.ahead) {
     const SafeDistance d = s.centre_safe_distance(c, s.safe_distance.target);
     r.target_lane.push_back(behind(d, p.car(c).x[at]));
   }
@@ -180,21 +189,29 @@ Interval reachable_headings(const Scenario& s, Interval bounds, double t) {
 
 }  // namespace
 
-std::optional<Car> Gap::car_behind() const {
-  return behind.empty() ? std::nullopt : std::optional<Car>(behind.back());
+std::optional<CarIndex> Gap::car_behind() const {
+  return behind.empty() ? std::nullopt : std::optional<CarIndex>(behind.back());
 }
 
-std::optional<Car> Gap::car_ahead() const {
-  return ahead.empty() ? std::nullopt : std::optional<Car>(ahead.front());
+std::optional<CarIndex> Gap::car_ahead() const {
+  return ahead.empty() ? std::nullopt : std::optional<CarIndex>(ahead.front());
 }
 
-Gap paper_gap() { return {{Car::Follower}, {Car::Target}}; }
+Gap paper_gap(const Scenario& s) {
+  Gap gap;
+  if (s.has(Role::Follower)) gap.behind.push_back(s.index_of(Role::Follower));
+  if (s.has(Role::Target)) gap.ahead.push_back(s.index_of(Role::Target));
+  return gap;
+}
 
 std::vector<Gap> target_lane_gaps(const Scenario& s, GapChoice choice) {
-  if (choice == GapChoice::Fixed) return {paper_gap()};
-  std::vector<Car> lane{Car::Follower, Car::Target};
+  if (choice == GapChoice::Fixed) return {paper_gap(s)};
+  std::vector<CarIndex> lane;
+  for (CarIndex c = 0; c < s.car_count(); ++c) {
+    if (s.cars[c].lane == Lane::Target) lane.push_back(c);
+  }
   std::stable_sort(lane.begin(), lane.end(),
-                   [&s](Car a, Car b) { return s.car(a).x < s.car(b).x; });
+                   [&s](CarIndex a, CarIndex b) { return s.car(a).x < s.car(b).x; });
   std::vector<Gap> gaps;
   for (std::size_t split = 0; split <= lane.size(); ++split) {
     const auto at = lane.begin() + static_cast<std::ptrdiff_t>(split);
@@ -227,9 +244,9 @@ GapAim aim_into(const Scenario& s, const Config& c, const TrafficPrediction& p, 
   return {s.ego.x + s.ego.v * s.horizon, s.ego.v, 0.0};
 }
 
-std::string describe(const Gap& gap) {
-  const auto name = [](std::optional<Car> c) {
-    return c ? std::string(lanechange::to_string(*c)) : std::string("none");
+std::string describe(const Scenario& s, const Gap& gap) {
+  const auto name = [&s](std::optional<CarIndex> c) {
+    return c ? s.cars[*c].id : std::string("none");
   };
   return name(gap.car_behind()) + "-" + name(gap.car_ahead());
 }
@@ -245,7 +262,7 @@ int lane_mode_index(LaneRule rule, LaneOccupancy occupancy) {
 
 LaneChangeQp build_lane_change_qp(const Scenario& s, const Config& config, const Iterate& point,
                                   const TrafficPrediction& prediction) {
-  return build_lane_change_qp(s, config, point, prediction, paper_gap());
+  return build_lane_change_qp(s, config, point, prediction, paper_gap(s));
 }
 
 LaneChangeQp build_lane_change_qp(const Scenario& s, const Config& config, const Iterate& point,

@@ -451,20 +451,25 @@ std::string start_inside_safe_distance(const Scenario& s) {
                   needed);
     return std::string(text);
   };
-  const SafetyMargins d = s.centre_safe_distances();
-  const double to_leader = s.leader.x - s.ego.x;
-  const double leader_needs = d.leader.standstill + d.leader.time_headway * s.ego.v;
-  if (in_ego_lane && to_leader >= 0 && to_leader < leader_needs) {
-    return describe("leader", to_leader, leader_needs);
-  }
-  const double to_target = s.target.x - s.ego.x;
-  const double target_needs = d.target.standstill + d.target.time_headway * s.ego.v;
-  if (in_target_lane && to_target < target_needs)
-    return describe("target", to_target, target_needs);
-  const double from_follower = s.ego.x - s.follower.x;
-  const double follower_needs = d.follower.standstill + d.follower.time_headway * s.follower.v;
-  if (in_target_lane && from_follower < follower_needs) {
-    return describe("follower", from_follower, follower_needs);
+  const Lane lane_of_ego[] = {Lane::Ego, Lane::Target};
+  const bool in_lane[] = {in_ego_lane, in_target_lane};
+  for (int l = 0; l < 2; ++l) {
+    if (!in_lane[l]) continue;
+    for (CarIndex c = 0; c < s.car_count(); ++c) {
+      if (s.cars[c].lane != lane_of_ego[l]) continue;
+      const CarState& car = s.car(c);
+      const double ahead_by = car.x - s.ego.x;
+      if (ahead_by >= 0) {
+        const SafeDistance d =
+            s.centre_safe_distance(c, l == 0 ? s.safe_distance.leader : s.safe_distance.target);
+        const double needs = d.standstill + d.time_headway * s.ego.v;
+        if (ahead_by < needs) return describe(s.cars[c].id.c_str(), ahead_by, needs);
+      } else {
+        const SafeDistance d = s.centre_safe_distance(c, s.safe_distance.follower);
+        const double needs = d.standstill + d.time_headway * car.v;
+        if (-ahead_by < needs) return describe(s.cars[c].id.c_str(), -ahead_by, needs);
+      }
+    }
   }
   return "";
 }
@@ -547,9 +552,11 @@ Trajectory ExpertPlanner::to_trajectory(const ExpertResult& result,
     if (k < steps) state = step_trapezoidal(state, {u[kA], u[kOmega]}, t.dt);
   }
   t.others.dt = t.dt;
-  for (Car c : kAllCars) {
+  t.others.cars.resize(result.prediction.car_count());
+  t.cars = tracked_cars(scenario);
+  for (CarIndex c = 0; c < result.prediction.car_count(); ++c) {
     const CarTrack& full = result.prediction.car(c);
-    CarTrack& track = t.others.cars[static_cast<std::size_t>(c)];
+    CarTrack& track = t.others.cars[c];
     track.x.assign(full.x.begin(), full.x.begin() + steps + 1);
     track.v.assign(full.v.begin(), full.v.begin() + steps + 1);
     track.a.assign(full.a.begin(), full.a.begin() + steps + 1);
@@ -566,7 +573,7 @@ Trajectory ExpertPlanner::to_trajectory(const ExpertResult& result,
     t.reason = l.reason;
     if (t.collision && t.label != Label::Failure) {
       t.label = Label::Failure;
-      t.reason = "collision with the " + std::string(lanechange::to_string(collision->car)) +
+      t.reason = "collision with the " + scenario.cars[collision->car].id +
                  " at t = " + std::to_string(collision->time) + " s";
     }
   }
@@ -585,8 +592,8 @@ Trajectory ExpertPlanner::to_trajectory(const ExpertResult& result,
          {"solve_ms", r.solve_ms}});
     if (std::isfinite(r.trust_radius)) rounds.back()["trust_radius"] = r.trust_radius;
   }
-  const auto car_name = [](std::optional<Car> c) {
-    return c ? nlohmann::json(lanechange::to_string(*c)) : nlohmann::json();
+  const auto car_name = [&scenario](std::optional<CarIndex> c) {
+    return c ? nlohmann::json(scenario.cars[*c].id) : nlohmann::json();
   };
   t.details = {{"objective", result.objective},
                {"iterations", result.iterations()},

@@ -109,7 +109,7 @@ Iterate authors_warm_start(const Scenario& s, const TrafficPrediction& p) {
   const double T = s.horizon;
   const double dt = T / s.steps;
   const Quintic y(s.ego.y, 0.0, 0.0, s.lane_width, 0.0, 0.0, T);
-  const double v_end = p.car(Car::Target).v.front();
+  const double v_end = s.has(Role::Target) ? p.car(s.index_of(Role::Target)).v.front() : s.ego.v;
   Iterate path;
   for (int k = 0; k <= s.steps; ++k) {
     const double t = k * dt;
@@ -157,7 +157,7 @@ Iterate warm_start_for_modes(const Scenario& scenario, const Config& config,
   // Under the either-or rule a node is in one lane or the other.
   if (touches >= 0 && across < 0 && rule == LaneRule::EitherOr) across = touches;
   Iterate path = quintic_path(scenario, config, prediction,
-                              move_timed_to(scenario, touches, across), paper_gap());
+                              move_timed_to(scenario, touches, across), paper_gap(scenario));
   // The flat start would give node 0 no heading; it has the ego's.
   path.states.front() = State(scenario.ego.x, scenario.ego.y, scenario.ego.v, scenario.ego.theta);
   fill_controls(path, scenario.horizon / scenario.steps);
@@ -173,7 +173,7 @@ Iterate warm_start(const Scenario& scenario, const Config& config,
 
 Iterate warm_start(const Scenario& scenario, const Config& config,
                    const TrafficPrediction& prediction) {
-  return warm_start(scenario, config, prediction, paper_gap());
+  return warm_start(scenario, config, prediction, paper_gap(scenario));
 }
 
 }  // namespace lanechange::expert

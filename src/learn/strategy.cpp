@@ -42,12 +42,12 @@ struct NodeColumns {
 Eigen::VectorXd node_features(const Eigen::RowVectorXd& z, double last_a, double horizon_left,
                               int behavior, double traffic_speed_cap) {
   static const NodeColumns c;
-  Scenario scene;
-  scene.behavior = static_cast<Behavior>(behavior);
+  Scenario scene = three_car_scenario(Config{});
+  scene.set_behavior(static_cast<Behavior>(behavior));
   scene.ego = {z(c.x), z(c.y), z(c.v), z(c.theta), last_a};
   for (Eigen::Index i = 0; i < 3; ++i) {
-    const Eigen::Index at = c.cars + 3 * i;  // x, v, a of car i
-    scene.car(static_cast<Car>(i)) = {z(at), z(at + 1), z(at + 2)};
+    const Eigen::Index at = c.cars + 3 * i;  // x, v, a of car i, in Role order
+    scene.car(static_cast<Role>(i)) = {z(at), z(at + 1), z(at + 2)};
   }
   scene.horizon = horizon_left;
   return strategy_features(scene, traffic_speed_cap);
@@ -158,8 +158,8 @@ double gap_open_time(const Scenario& s, double traffic_speed_cap) {
   const double ahead_needed = d.target.standstill + d.target.time_headway * s.ego.v;
   // The cars move as the constant-acceleration traffic model moves them
   // (stopping at 0, held at the cap), so the feature agrees with the scenes.
-  CarState target = s.target;
-  CarState follower = s.follower;
+  CarState target = s.target();
+  CarState follower = s.follower();
   for (int i = 0; i * kGapTimeStep <= kGapLookahead; ++i) {
     const double t = i * kGapTimeStep;
     if (i > 0) {
@@ -175,9 +175,11 @@ double gap_open_time(const Scenario& s, double traffic_speed_cap) {
 
 Eigen::VectorXd strategy_features(const Scenario& s, double traffic_speed_cap) {
   Eigen::VectorXd f(static_cast<Eigen::Index>(strategy_feature_names().size()));
-  f << s.ego.y, s.ego.theta, s.ego.v, s.ego.a, s.leader.x - s.ego.x, s.leader.v, s.leader.a,
-      s.follower.x - s.ego.x, s.follower.v, s.follower.a, s.target.x - s.ego.x, s.target.v,
-      s.target.a, s.horizon, 0.0, 0.0, 0.0, gap_open_time(s, traffic_speed_cap);
+  const CarState& l = s.leader();
+  const CarState& b = s.follower();
+  const CarState& g = s.target();
+  f << s.ego.y, s.ego.theta, s.ego.v, s.ego.a, l.x - s.ego.x, l.v, l.a, b.x - s.ego.x, b.v, b.a,
+      g.x - s.ego.x, g.v, g.a, s.horizon, 0.0, 0.0, 0.0, gap_open_time(s, traffic_speed_cap);
   f(14 + static_cast<Eigen::Index>(s.behavior)) = 1.0;
   return f;
 }

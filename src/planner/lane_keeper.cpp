@@ -92,52 +92,54 @@ double LaneKeeper::keep_up(double ego_x, double speed, double gap_ahead, double 
 
 namespace {
 
-LaneCar lane_car(const Observation& o, Car car) {
+LaneCar lane_car(const Observation& o, CarIndex car) {
   return LaneCar{car, o.car(car), o.scene->size_of(car).length};
+}
+
+// The car of the lane nearest the ego ahead of it (ahead) or behind it.
+std::optional<LaneCar> nearest_in_lane(const Observation& o, bool target_lane, bool ahead) {
+  const Lane lane = target_lane ? Lane::Target : Lane::Ego;
+  std::optional<LaneCar> best;
+  for (CarIndex i = 0; i < o.cars.size(); ++i) {
+    const double x = o.car(i).x;
+    if (o.scene->cars[i].lane != lane || (x > o.ego.x) != ahead) continue;
+    if (!best || (ahead ? x < best->state.x : x > best->state.x)) best = lane_car(o, i);
+  }
+  return best;
 }
 
 }  // namespace
 
 std::optional<LaneCar> car_ahead(const Observation& o, bool target_lane) {
-  if (!target_lane) return lane_car(o, Car::Leader);
-  // In the target lane the follower may be ahead once the ego fell behind it.
-  std::optional<LaneCar> best;
-  for (const Car car : {Car::Follower, Car::Target}) {
-    const CarState& c = o.car(car);
-    if (c.x > o.ego.x && (!best || c.x < best->state.x)) best = lane_car(o, car);
-  }
-  return best;
+  return nearest_in_lane(o, target_lane, true);
 }
 
 std::optional<LaneCar> car_behind(const Observation& o, bool target_lane) {
-  if (!target_lane) return std::nullopt;
-  std::optional<LaneCar> best;
-  for (const Car car : {Car::Follower, Car::Target}) {
-    const CarState& c = o.car(car);
-    if (c.x <= o.ego.x && (!best || c.x > best->state.x)) best = lane_car(o, car);
-  }
-  return best;
+  return nearest_in_lane(o, target_lane, false);
 }
 
 namespace {
 
 // How far (m) the ego is from breaking the expert's safe distances (Eq. 1)
-// to the cars of a lane: negative when it already does. The car behind is
-// measured by the follower's rule, the car ahead by the target's (or, in the
-// ego lane, the leader's).
+// to the cars of a lane: negative when it already does. A car behind is
+// measured by the follower's rule, one ahead by the target's (or, in the ego
+// lane, the leader's).
 double lane_margin(const Observation& o, bool target_lane) {
-  const SafetyMargins d = o.scene->centre_safe_distances();
+  const Scenario& s = *o.scene;
+  const Lane lane = target_lane ? Lane::Target : Lane::Ego;
   const EgoState& ego = o.ego;
-  if (!target_lane) {
-    const CarState& leader = o.car(Car::Leader);
-    return leader.x - d.leader.standstill - (ego.x + d.leader.time_headway * ego.v);
-  }
   double margin = std::numeric_limits<double>::infinity();
-  for (const Car car : {Car::Follower, Car::Target}) {
-    const CarState& c = o.car(car);
-    margin = std::min(
-        margin, c.x <= ego.x ? ego.x - (c.x + d.follower.standstill + d.follower.time_headway * c.v)
-                             : c.x - d.target.standstill - (ego.x + d.target.time_headway * ego.v));
+  for (CarIndex i = 0; i < o.cars.size(); ++i) {
+    if (s.cars[i].lane != lane) continue;
+    const CarState& c = o.car(i);
+    if (c.x <= ego.x) {
+      const SafeDistance d = s.centre_safe_distance(i, s.safe_distance.follower);
+      margin = std::min(margin, ego.x - (c.x + d.standstill + d.time_headway * c.v));
+    } else {
+      const SafeDistance d =
+          s.centre_safe_distance(i, target_lane ? s.safe_distance.target : s.safe_distance.leader);
+      margin = std::min(margin, c.x - d.standstill - (ego.x + d.time_headway * ego.v));
+    }
   }
   return margin;
 }

@@ -56,9 +56,7 @@ Config closed_loop_expert(Config config) {
 Scenario scene_now(const Observation& o, const Config& config) {
   Scenario scene = *o.scene;
   scene.ego = o.ego;
-  scene.leader = o.car(Car::Leader);
-  scene.follower = o.car(Car::Follower);
-  scene.target = o.car(Car::Target);
+  for (CarIndex c = 0; c < scene.car_count(); ++c) scene.cars[c].state = o.car(c);
   const double dt = o.scene->horizon / o.scene->steps;
   if (config.closed_loop.horizon_mode == HorizonMode::Shrinking) {
     const double left = std::max(config.closed_loop.min_horizon, o.scene->horizon - o.t);

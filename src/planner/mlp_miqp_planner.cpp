@@ -6,6 +6,7 @@
 // and the fallback acts where the expert finds no plan either.
 #include "planner/mlp_miqp_planner.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <functional>
@@ -38,7 +39,7 @@ const std::map<std::string, Getter>& input_sources() {
     m["y"] = [](const Observation& o) { return o.ego.y; };
     m["v"] = [](const Observation& o) { return o.ego.v; };
     m["theta"] = [](const Observation& o) { return o.ego.theta; };
-    for (const Car car : kAllCars) {
+    for (const Role car : kRoles) {
       const std::string name(to_string(car));
       m[name + "_x0"] = [car](const Observation& o) { return o.scene->car(car).x; };
       m[name + "_v0"] = [car](const Observation& o) { return o.scene->car(car).v; };
@@ -68,7 +69,8 @@ static MlpMiqpPlanner::SceneClassifier scene_classifier(std::shared_ptr<const le
     Observation start;
     start.scene = &s;
     start.ego = s.ego;
-    start.cars = {s.leader, s.follower, s.target};
+    start.cars.reserve(s.car_count());
+    for (const OtherCar& car : s.cars) start.cars.push_back(car.state);
     const Eigen::MatrixXd row = features->read(start).transpose();
     return model->classify(learn::ClassifierKind::Svm, learn::FeatureSet::Plain, row).front();
   };
@@ -136,15 +138,20 @@ bool MlpMiqpPlanner::tries(const Scenario& scene) const {
   return classify_(scene) != static_cast<int>(Label::Failure);
 }
 
+// The classifier and the network read the paper's three cars; in a scene
+// without one of them the expert drives from the start.
 std::unique_ptr<PlannerSession> MlpMiqpPlanner::start(const Scenario& scene) const {
-  return std::make_unique<MlpMiqpSession>(*this, tries(scene));
+  if (!scene.has_every_role()) return std::make_unique<MlpMiqpSession>(*this, true, true);
+  return std::make_unique<MlpMiqpSession>(*this, tries(scene), false);
 }
 
-MlpMiqpSession::MlpMiqpSession(const MlpMiqpPlanner& planner, bool tries)
+MlpMiqpSession::MlpMiqpSession(const MlpMiqpPlanner& planner, bool tries, bool expert_only)
     : planner_(planner),
       keeper_(planner.config()),
       expert_(planner.expert(), planner.config()),
-      refused_(!tries) {}
+      refused_(!tries),
+      expert_in_charge_(expert_only),
+      expert_only_(expert_only) {}
 
 Decision MlpMiqpSession::act(const Observation& o) {
   if (refused_) return refused(o);
@@ -166,7 +173,9 @@ Decision MlpMiqpSession::expert_decision(const Observation& o, const std::string
     d.status = ActStatus::TookOver;
   } else if (d.status == ActStatus::Planned) {
     d.status = ActStatus::TookOver;
-    d.reason = "the expert drives since the take-over";
+    d.reason = expert_only_ ? "the expert drives: the network reads a leader, a follower and a "
+                              "target, and the scene lacks one"
+                            : "the expert drives since the take-over";
   }
   return d;
 }
@@ -202,14 +211,14 @@ EgoControl MlpMiqpSession::network_control(const Observation& o) const {
 
 namespace {
 
-std::string network_hit(Car car, double in_seconds) {
-  return "the network would hit the " + std::string(to_string(car)) + " in " +
-         std::to_string(in_seconds) + " s";
+std::string network_hit(const Scenario& scene, CarIndex car, double in_seconds) {
+  return "the network would hit the " + scene.cars[car].id + " in " + std::to_string(in_seconds) +
+         " s";
 }
 
 // The shortfall is in the reason: the expert's own plans touch these
 // distances, so how far the network misses them says how near it came.
-std::string short_of_safe_distance(Car car, double shortfall) {
+std::string short_of_safe_distance(Role car, double shortfall) {
   char what[128];
   std::snprintf(what, sizeof what,
                 "the network would enter the target lane %.2f m short of the %s's safe distance",
@@ -226,17 +235,17 @@ std::string too_close_in_target_lane(const Observation& o, const Scenario& scene
   const double w = scene.lane_width;
   if (o.ego.y + scene.vehicle.width / 2.0 <= w / 2.0) return "";
   const SafetyMargins d = scene.centre_safe_distances();
-  const CarState& follower = o.car(Car::Follower);
-  const CarState& target = o.car(Car::Target);
+  const CarState& follower = o.car(Role::Follower);
+  const CarState& target = o.car(Role::Target);
   // The gap is the one between the follower and the target: behind the
   // follower (when it is ahead) is not where the expert changes lanes.
   const double behind_follower =
       follower.x + d.follower.standstill + d.follower.time_headway * follower.v - o.ego.x;
-  if (behind_follower > 0.0) return short_of_safe_distance(Car::Follower, behind_follower);
+  if (behind_follower > 0.0) return short_of_safe_distance(Role::Follower, behind_follower);
   // Likewise ahead of the target (when it is behind, passing the ego).
   const double past_target =
       o.ego.x + d.target.time_headway * o.ego.v - (target.x - d.target.standstill);
-  if (past_target > 0.0) return short_of_safe_distance(Car::Target, past_target);
+  if (past_target > 0.0) return short_of_safe_distance(Role::Target, past_target);
   return "";
 }
 
@@ -262,10 +271,10 @@ std::string MlpMiqpSession::roll_out(const Observation& now, EgoControl first) {
   w.traffic.emplace(*w.scene, config);
   w.ego.assign(1, now.ego);
   w.ahead.clear();
-  w.cars = {};
   w.cars.dt = dt;
-  for (const Car c : kAllCars) {
-    CarTrack& track = w.cars.cars[static_cast<std::size_t>(c)];
+  w.cars.cars.resize(w.traffic->car_count());
+  for (CarIndex c = 0; c < w.traffic->car_count(); ++c) {
+    CarTrack& track = w.cars.cars[c];
     const CarState& car = w.traffic->car(c);
     track.x.assign(1, car.x);
     track.v.assign(1, car.v);
@@ -282,7 +291,7 @@ std::string MlpMiqpSession::roll_out(const Observation& now, EgoControl first) {
   }
   if (const auto hit = first_collision(w.ego, w.cars, *w.scene)) {
     w.step = -1;
-    return network_hit(hit->car, hit->time);
+    return network_hit(*w.scene, hit->car, hit->time);
   }
   return "";
 }
@@ -301,7 +310,7 @@ bool MlpMiqpSession::window_fits(const Observation& now) const {
       std::abs(ego.theta - now.ego.theta) > heading_tolerance) {
     return false;
   }
-  for (const Car c : kAllCars) {
+  for (CarIndex c = 0; c < now.cars.size(); ++c) {
     const CarTrack& track = window_.cars.car(c);
     if (std::abs(track.x[1] - now.car(c).x) > tolerance ||
         std::abs(track.v[1] - now.car(c).v) > tolerance) {
@@ -331,6 +340,7 @@ std::string MlpMiqpSession::extend_window() {
     return problem;
   }
   segment_.dt = dt;
+  segment_.cars.resize(w.cars.cars.size());
   for (std::size_t c = 0; c < segment_.cars.size(); ++c) {
     const CarTrack& from = w.cars.cars[c];
     CarTrack& to = segment_.cars[c];
@@ -341,7 +351,7 @@ std::string MlpMiqpSession::extend_window() {
   const std::span<const EgoState> last_step(w.ego.end() - 2, 2);
   if (const auto hit = first_collision(last_step, segment_, *w.scene)) {
     w.step = -1;
-    return network_hit(hit->car, hit->time + (ahead - 1) * dt);
+    return network_hit(*w.scene, hit->car, hit->time + (ahead - 1) * dt);
   }
   return "";
 }
@@ -359,10 +369,10 @@ void MlpMiqpSession::advance_window(double dt) {
   o.t += dt;
   ++o.step;
   w.ego.push_back(o.ego);
-  for (const Car c : kAllCars) {
+  for (CarIndex c = 0; c < w.traffic->car_count(); ++c) {
     const CarState& car = w.traffic->car(c);
-    o.cars[static_cast<std::size_t>(c)] = car;
-    CarTrack& track = w.cars.cars[static_cast<std::size_t>(c)];
+    o.cars[c] = car;
+    CarTrack& track = w.cars.cars[c];
     // The acceleration applied from the last node on is known only now.
     track.a.back() = car.a;
     track.x.push_back(car.x);

@@ -65,7 +65,8 @@ class MlpMiqpPlanner final : public ClosedLoopPlanner {
 
 class MlpMiqpSession final : public PlannerSession {
  public:
-  MlpMiqpSession(const MlpMiqpPlanner& planner, bool tries);
+  /// `expert_only`: the expert drives every step (a scene the network cannot read).
+  MlpMiqpSession(const MlpMiqpPlanner& planner, bool tries, bool expert_only);
   [[nodiscard]] Decision act(const Observation& observation) override;
   /// The look-ahead's predicted observations, one step ahead onwards: the
   /// states the network would drive to. After a check that failed, they end
@@ -110,6 +111,7 @@ class MlpMiqpSession final : public PlannerSession {
   TrafficPrediction segment_;    ///< the window's last step, for the collision test
   std::vector<double> lateral_;  ///< the window's y, for the reversal test
   bool expert_in_charge_ = false;
+  bool expert_only_ = false;
 };
 
 }  // namespace lanechange::planner

@@ -374,6 +374,15 @@ StrategyPlan StrategyQpPlanner::plan(const Scenario& scene, const expert::PlanLi
                                      const expert::PlanHints& hints) const {
   const auto start = Clock::now();
   StrategyPlan out;
+  // The strategies are learned on the paper's three cars; a scene without
+  // one of them is the exact search's alone.
+  if (!scene.has_every_role()) {
+    out.result = exact_.plan(scene, limits, {hints.path, nullptr, hints.path_is_plan});
+    out.qp_iterations += qp_iterations_of(out.result);
+    out.total_ms = ms_since(start);
+    out.result.total_ms = out.total_ms;
+    return out;
+  }
   const std::vector<Candidate> list = candidates_of(scene, hints);
   out.predict_ms = ms_since(start);
   std::vector<int> rescued_hint;

@@ -1,6 +1,8 @@
 // Animated SVG of a trajectory (plot.hpp). The scene is drawn in metres with
 // the y axis up; the view box moves with the ego, so a 100 m manoeuvre stays
 // readable at the size of a screen.
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <numbers>
 #include <sstream>
@@ -19,8 +21,24 @@ struct Colors {
 };
 // The same colours as the PNG plots, so the two read alike.
 constexpr Colors kEgo{"#d62728", "ego"};
-constexpr std::array<Colors, 3> kCars{
+constexpr std::array<Colors, 3> kRoleCars{
     {{"#1f77b4", "leader"}, {"#2ca02c", "follower"}, {"#9467bd", "target"}}};
+constexpr const char* kOtherFill = "#8c8c8c";
+
+const char* fill_of(const std::string& id) {
+  for (const Colors& role : kRoleCars) {
+    if (id == role.name) return role.fill;
+  }
+  return kOtherFill;
+}
+
+// The cars around the gap an expert plan took get a heavier outline.
+bool frames_gap(const Trajectory& tr, const std::string& id) {
+  const auto gap = tr.details.find("gap");
+  if (gap == tr.details.end() || !gap->is_object()) return false;
+  return std::any_of(gap->begin(), gap->end(),
+                     [&id](const nlohmann::json& car) { return car.is_string() && car == id; });
+}
 
 std::string num(double v) {
   std::ostringstream out;
@@ -36,6 +54,9 @@ void check(const Trajectory& tr, const AnimationOptions& o) {
   if (tr.nodes() < 2) throw InputError("trajectory", "needs at least two nodes to animate");
   if (tr.ego.size() != tr.t.size()) throw InputError("ego", "needs one state per node");
   if (!(tr.lane_width > 0)) throw InputError("lane_width", "must be positive");
+  if (tr.cars.size() != tr.others.cars.size()) {
+    throw InputError("others", "needs the id, lane and body of every track");
+  }
   for (const auto& car : tr.others.cars) {
     if (car.x.size() < tr.t.size()) throw InputError("others", "needs one position per node");
   }
@@ -64,11 +85,13 @@ std::string animate_transform(const std::string& type, const std::string& vals,
          "\" dur=\"" + dur + "\" calcMode=\"linear\" repeatCount=\"indefinite\"/>";
 }
 
-std::string car_body(const VehicleSize& v, const char* fill, const char* name) {
+std::string car_body(const VehicleSize& v, const char* fill, const std::string& name,
+                     double stroke = 0.08) {
   std::ostringstream out;
   out << "<rect x=\"" << num(-v.length / 2) << "\" y=\"" << num(-v.width / 2) << "\" width=\""
       << num(v.length) << "\" height=\"" << num(v.width) << "\" rx=\"0.3\" fill=\"" << fill
-      << "\" stroke=\"#000\" stroke-width=\"0.08\"><title>" << name << "</title></rect>";
+      << "\" stroke=\"#000\" stroke-width=\"" << num(stroke) << "\"><title>" << name
+      << "</title></rect>";
   return out.str();
 }
 
@@ -142,9 +165,10 @@ std::string trajectory_animation_svg(const Trajectory& tr, const AnimationOption
   out << "<g transform=\"scale(1,-1)\">\n";
   draw_road(out, tr, x_lo, x_hi);
   draw_path_and_events(out, tr);
-  for (std::size_t c = 0; c < kCars.size(); ++c) {
+  for (std::size_t c = 0; c < tr.cars.size(); ++c) {
     const auto& car = tr.others.cars[c];
-    const double lane_y = c == 0 ? 0.0 : w;  // the leader drives in the ego lane
+    const TrackedCar& who = tr.cars[c];
+    const double lane_y = who.lane == Lane::Ego ? 0.0 : w;
     out << "<g>"
         << animate_transform("translate",
                              values(n,
@@ -153,7 +177,8 @@ std::string trajectory_animation_svg(const Trajectory& tr, const AnimationOption
                                              num(lane_y);
                                     }),
                              dur)
-        << car_body(o.vehicle, kCars[c].fill, kCars[c].name) << "</g>\n";
+        << car_body(who.size, fill_of(who.id), who.id, frames_gap(tr, who.id) ? 0.3 : 0.08)
+        << "</g>\n";
   }
   out << "<g>"
       << animate_transform("translate",

@@ -19,6 +19,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <limits>
 #include <ostream>
 #include <sstream>
 #include <stdexcept>
@@ -43,23 +44,21 @@ struct Pose {
   double theta = 0.0;
 };
 
-/// Everything drawn at one instant; the others' lanes are fixed by the format.
+/// Everything drawn at one instant; the others keep their lanes.
 struct Snapshot {
   double time = 0.0;
   Pose ego;
-  std::array<double, 3> car_x{};
+  std::vector<double> car_x;  ///< Trajectory::others' order
 };
 
 struct Range {
-  double lo = INFINITY;
-  double hi = -INFINITY;
+  double lo = std::numeric_limits<double>::infinity();
+  double hi = -std::numeric_limits<double>::infinity();
   void include(double v) {
     lo = std::min(lo, v);
     hi = std::max(hi, v);
   }
 };
-
-constexpr std::size_t index(Car c) { return static_cast<std::size_t>(c); }
 
 void require(bool ok, const std::string& field, const std::string& problem) {
   if (!ok) throw InputError(field, problem);
@@ -91,10 +90,15 @@ void validate(const Trajectory& tr, const PlotOptions& options) {
     require(std::isfinite(s.x) && std::isfinite(s.y) && std::isfinite(s.theta), "ego",
             "x, y and theta must be finite");
   }
-  for (Car c : kAllCars) {
-    const std::string field = "others." + std::string(to_string(c)) + ".x";
+  require(tr.cars.size() == tr.others.cars.size(), "others",
+          "names " + std::to_string(tr.cars.size()) + " cars for " +
+              std::to_string(tr.others.cars.size()) + " tracks");
+  for (std::size_t c = 0; c < tr.cars.size(); ++c) {
+    const std::string field = "others." + tr.cars[c].id + ".x";
     require_length(tr.others.car(c).x.size(), n, field);
     require_finite(tr.others.car(c).x, field);
+    require(tr.cars[c].size.length > 0.0 && tr.cars[c].size.width > 0.0,
+            "others." + tr.cars[c].id + ".length", "a car's body must be positive");
   }
 }
 
@@ -111,10 +115,7 @@ Snapshot snapshot_at(const Trajectory& tr, double time) {
   const EgoState& a = tr.ego[lo];
   const EgoState& b = tr.ego[hi];
   Snapshot snap{time, {lerp(a.x, b.x, s), lerp(a.y, b.y, s), lerp(a.theta, b.theta, s)}, {}};
-  for (Car c : kAllCars) {
-    const auto& x = tr.others.car(c).x;
-    snap.car_x[index(c)] = lerp(x[lo], x[hi], s);
-  }
+  for (const CarTrack& car : tr.others.cars) snap.car_x.push_back(lerp(car.x[lo], car.x[hi], s));
   return snap;
 }
 
@@ -122,7 +123,7 @@ std::vector<Snapshot> snapshots(const Trajectory& tr, int count) {
   if (tr.t.size() == 1) {
     const EgoState& e = tr.ego.front();
     Snapshot only{tr.t.front(), {e.x, e.y, e.theta}, {}};
-    for (Car c : kAllCars) only.car_x[index(c)] = tr.others.car(c).x.front();
+    for (const CarTrack& car : tr.others.cars) only.car_x.push_back(car.x.front());
     return {only};
   }
   const double first = tr.t.front();
@@ -147,10 +148,12 @@ std::array<Point, 4> corners(const Pose& pose, const VehicleSize& size) {
   return out;
 }
 
-double lane_center(Car c, double lane_width) { return c == Car::Leader ? 0.0 : lane_width; }
+double lane_center(const TrackedCar& car, double lane_width) {
+  return car.lane == Lane::Ego ? 0.0 : lane_width;
+}
 
-Pose car_pose(const Snapshot& snap, Car c, double lane_width) {
-  return {snap.car_x[index(c)], lane_center(c, lane_width), 0.0};
+Pose car_pose(const Snapshot& snap, const Trajectory& tr, std::size_t c) {
+  return {snap.car_x[c], lane_center(tr.cars[c], tr.lane_width), 0.0};
 }
 
 // ------------------------------------------------------------- formatting
@@ -204,24 +207,57 @@ std::string title_of(const Trajectory& tr) {
 // --------------------------------------------------------------- the script
 
 struct CarStyle {
-  const char* name;
+  std::string name;
   const char* color;
   /// Where the time label sits across the car, as a fraction of its width:
   /// cars that can overlap get different offsets so their labels do not.
-  double label_offset;
+  double label_offset = 0.0;
+  double border = 1.0;  ///< thicker for the cars that frame the gap taken
 };
 
-constexpr CarStyle kEgoStyle{"ego", "#1f5fbf", 0.0};
-constexpr std::array<CarStyle, 3> kCarStyles{
-    {{"leader", "#2a9d3a", -0.3}, {"follower", "#e07b00", -0.3}, {"target", "#c8202a", 0.3}}};
+const CarStyle& ego_style() {
+  static const CarStyle style{"ego", "#1f5fbf", 0.0};
+  return style;
+}
+
+// The paper's three cars keep their colours; any other car is grey.
+const std::array<CarStyle, 3>& role_styles() {
+  static const std::array<CarStyle, 3> styles{
+      {{"leader", "#2a9d3a", -0.3}, {"follower", "#e07b00", -0.3}, {"target", "#c8202a", 0.3}}};
+  return styles;
+}
+constexpr const char* kOtherColor = "#6e6e6e";
+
+// The ids of the cars around the gap an expert plan took (details.gap).
+std::vector<std::string> gap_cars(const Trajectory& tr) {
+  std::vector<std::string> ids;
+  if (const auto gap = tr.details.find("gap"); gap != tr.details.end() && gap->is_object()) {
+    for (const char* side : {"behind", "ahead"}) {
+      const auto car = gap->find(side);
+      if (car != gap->end() && car->is_string()) ids.push_back(car->get<std::string>());
+    }
+  }
+  return ids;
+}
+
+CarStyle style_of(const Trajectory& tr, std::size_t c) {
+  const std::string& id = tr.cars[c].id;
+  CarStyle style{id, kOtherColor, c % 2 == 0 ? -0.3 : 0.3};
+  for (const CarStyle& role : role_styles()) {
+    if (role.name == id) style = role;
+  }
+  const auto framing = gap_cars(tr);
+  if (std::find(framing.begin(), framing.end(), id) != framing.end()) style.border = 3.0;
+  return style;
+}
 
 Range x_range(const Trajectory& tr, const std::vector<Snapshot>& snaps, const VehicleSize& size) {
   Range r;
   for (const auto& s : tr.ego) r.include(s.x);
   for (const auto& snap : snaps) {
     for (const Point& p : corners(snap.ego, size)) r.include(p.x);
-    for (Car c : kAllCars) {
-      for (const Point& p : corners(car_pose(snap, c, tr.lane_width), size)) r.include(p.x);
+    for (std::size_t c = 0; c < tr.cars.size(); ++c) {
+      for (const Point& p : corners(car_pose(snap, tr, c), tr.cars[c].size)) r.include(p.x);
     }
   }
   const double margin = std::max(2.0, 0.03 * (r.hi - r.lo));
@@ -285,7 +321,8 @@ void write_car(std::ostream& out, const Pose& pose, const VehicleSize& size, con
     out << " to " << num(c[i % c.size()].x) << "," << num(c[i % c.size()].y);
   }
   out << " back fc rgb '" << style.color << "' fs transparent solid " << num(opacity)
-      << " border lc rgb '" << style.color << "' lw 1\n";
+      << " border lc rgb '" << (style.border > 1.0 ? "#000000" : style.color) << "' lw "
+      << num(style.border) << "\n";
 }
 
 void write_time_label(std::ostream& out, const Pose& pose, double offset, double time) {
@@ -302,28 +339,30 @@ void write_name(std::ostream& out, double x, double y, double lane_width, const 
       << " center front tc rgb '" << style.color << "' font 'Sans,10'\n";
 }
 
-void write_cars(std::ostream& out, const std::vector<Snapshot>& snaps, double lane_width,
+void write_cars(std::ostream& out, const Trajectory& tr, const std::vector<Snapshot>& snaps,
                 const VehicleSize& size, int& object) {
+  const double lane_width = tr.lane_width;
   for (std::size_t i = 0; i < snaps.size(); ++i) {
     const Snapshot& snap = snaps[i];
     // Later instants are more opaque, so the order is visible where cars overlap.
-    const double progress = snaps.size() == 1 ? 1.0 : static_cast<double>(i) / (snaps.size() - 1);
+    const double progress =
+        snaps.size() == 1 ? 1.0 : static_cast<double>(i) / static_cast<double>(snaps.size() - 1);
     const double opacity = 0.2 + 0.55 * progress;
     out << "# t = " << seconds(snap.time) << " s\n";
-    write_car(out, snap.ego, size, kEgoStyle, opacity, object);
+    write_car(out, snap.ego, size, ego_style(), opacity, object);
     write_time_label(out, snap.ego, 0.0, snap.time);
-    for (Car c : kAllCars) {
-      const Pose pose = car_pose(snap, c, lane_width);
-      const CarStyle& style = kCarStyles[index(c)];
-      write_car(out, pose, size, style, opacity, object);
-      write_time_label(out, pose, style.label_offset * size.width, snap.time);
+    for (std::size_t c = 0; c < tr.cars.size(); ++c) {
+      const Pose pose = car_pose(snap, tr, c);
+      const CarStyle style = style_of(tr, c);
+      write_car(out, pose, tr.cars[c].size, style, opacity, object);
+      write_time_label(out, pose, style.label_offset * tr.cars[c].size.width, snap.time);
     }
   }
   const Snapshot& first = snaps.front();
-  write_name(out, first.ego.x, first.ego.y, lane_width, kEgoStyle);
-  for (Car c : kAllCars) {
-    write_name(out, first.car_x[index(c)], lane_center(c, lane_width), lane_width,
-               kCarStyles[index(c)]);
+  write_name(out, first.ego.x, first.ego.y, lane_width, ego_style());
+  for (std::size_t c = 0; c < tr.cars.size(); ++c) {
+    write_name(out, first.car_x[c], lane_center(tr.cars[c], lane_width), lane_width,
+               style_of(tr, c));
   }
 }
 
@@ -352,7 +391,7 @@ void write_path_and_plot(std::ostream& out, const Trajectory& tr) {
   const int took_over = write_event_marks(out, tr, "took_over");
   const int fell_back = write_event_marks(out, tr, "fallback");
   // keyentry gives the legend a swatch per car without plotting anything.
-  out << "plot $ego_path using 1:2 with lines lw 2 lc rgb '" << kEgoStyle.color
+  out << "plot $ego_path using 1:2 with lines lw 2 lc rgb '" << ego_style().color
       << "' title 'ego path'";
   if (took_over > 0) {
     out << ", \\\n     $took_over using 1:2 with points pt 7 ps 0.8 lc rgb '#000000' "
@@ -366,8 +405,17 @@ void write_path_and_plot(std::ostream& out, const Trajectory& tr) {
     out << ", \\\n     keyentry with boxes fs solid 0.6 fc rgb '" << style.color << "' title "
         << gnuplot_string(style.name);
   };
-  swatch(kEgoStyle);
-  for (const CarStyle& style : kCarStyles) swatch(style);
+  swatch(ego_style());
+  bool others = false;
+  for (const CarStyle& role : role_styles()) {
+    const bool present = std::any_of(tr.cars.begin(), tr.cars.end(),
+                                     [&role](const TrackedCar& c) { return c.id == role.name; });
+    if (present) swatch(role);
+  }
+  for (std::size_t c = 0; c < tr.cars.size(); ++c) {
+    others = others || style_of(tr, c).color == kOtherColor;
+  }
+  if (others) swatch({"other cars", kOtherColor});
   out << "\nunset output\n";
 }
 
@@ -418,7 +466,7 @@ std::string search_path(const std::string& name) {
   const char* path = std::getenv("PATH");
   std::istringstream dirs(path != nullptr ? path : "");
   for (std::string dir; std::getline(dirs, dir, ':');) {
-    const std::string candidate = (dir.empty() ? std::string(".") : dir) + "/" + name;
+    std::string candidate = (dir.empty() ? std::string(".") : dir) + "/" + name;
     if (is_executable_file(candidate)) return candidate;
   }
   return {};
@@ -505,7 +553,7 @@ std::string trajectory_plot_script(const Trajectory& trajectory, const std::stri
   write_header(out, trajectory, png_path, options, snaps);
   int object = 1;
   write_road(out, trajectory.lane_width, object);
-  write_cars(out, snaps, trajectory.lane_width, options.vehicle, object);
+  write_cars(out, trajectory, snaps, options.vehicle, object);
   write_path_and_plot(out, trajectory);
   return out.str();
 }

@@ -58,7 +58,7 @@ void traffic_measures(const Trajectory& t, const Scenario& scene, RolloutMetrics
   for (int k = 0; k < t.nodes(); ++k) {
     const EgoState& e = t.ego[static_cast<std::size_t>(k)];
     const double ego_speed = e.v * std::cos(e.theta);
-    for (const Car c : kAllCars) {
+    for (CarIndex c = 0; c < scene.car_count(); ++c) {
       if (!body_in_lane(e.y, scene.vehicle.width, scene.lane_center(c), scene.lane_width)) {
         continue;
       }
@@ -73,14 +73,18 @@ void traffic_measures(const Trajectory& t, const Scenario& scene, RolloutMetrics
   }
 }
 
-// The gap a lane change ended in: Eq. 1's (between the follower and the
-// target), or one of the two that expert.gap = best opens too.
+// Where a lane change ended against Eq. 1's gap (between the scene's
+// follower and target): in it, ahead of it or behind it.
 std::string target_lane_slot(const Trajectory& t, const Scenario& scene) {
   const EgoState& e = t.ego.back();
   if (std::abs(e.y - scene.lane_width) > scene.lane_width / 2.0) return "";
   const auto last = static_cast<std::size_t>(t.nodes() - 1);
-  if (t.others.car(Car::Target).x[last] < e.x) return "ahead_of_target";
-  if (t.others.car(Car::Follower).x[last] > e.x) return "behind_follower";
+  if (scene.has(Role::Target) && t.others.car(scene.index_of(Role::Target)).x[last] < e.x) {
+    return "ahead_of_target";
+  }
+  if (scene.has(Role::Follower) && t.others.car(scene.index_of(Role::Follower)).x[last] > e.x) {
+    return "behind_follower";
+  }
   return "follower_target_gap";
 }
 

@@ -30,6 +30,10 @@ class Loop {
     path_.dt = dt_;
     path_.lane_width = scene.lane_width;
     path_.others.dt = dt_;
+    path_.others.cars.resize(scene.car_count());
+    path_.cars = tracked_cars(scene);
+    observation_.scene = &scene_;
+    observation_.cars.resize(scene.car_count());
     record_node();
   }
 
@@ -37,7 +41,7 @@ class Loop {
     path_.planner = std::string(planner.name());
     auto session = planner.start(scene_);
     for (int k = 0; k < steps; ++k) {
-      const Observation o = observe(k);
+      const Observation& o = observe(k);
       StepRecord record;
       EgoControl u = over_ ? keep_target_lane(o, record) : ask(*session, o, record);
       record.clipped = planner::clip_to_limits(u, ego_, scene_.limits, dt_);
@@ -51,14 +55,13 @@ class Loop {
   }
 
  private:
-  [[nodiscard]] Observation observe(int k) const {
-    Observation o;
-    o.scene = &scene_;
-    o.step = k;
-    o.t = k * dt_;
-    o.ego = ego_;
-    for (const Car c : kAllCars) o.cars[static_cast<std::size_t>(c)] = traffic_.car(c);
-    return o;
+  // Updated in place: a step allocates nothing for what the planner sees.
+  const Observation& observe(int k) {
+    observation_.step = k;
+    observation_.t = k * dt_;
+    observation_.ego = ego_;
+    std::copy(traffic_.cars().begin(), traffic_.cars().end(), observation_.cars.begin());
+    return observation_;
   }
 
   EgoControl keep_target_lane(const Observation& o, StepRecord& record) const {
@@ -105,8 +108,8 @@ class Loop {
   void record_node() {
     path_.t.push_back(static_cast<double>(path_.t.size()) * dt_);
     path_.ego.push_back(ego_);
-    for (const Car c : kAllCars) {
-      CarTrack& track = path_.others.cars[static_cast<std::size_t>(c)];
+    for (CarIndex c = 0; c < traffic_.car_count(); ++c) {
+      CarTrack& track = path_.others.cars[c];
       const CarState& car = traffic_.car(c);
       track.x.push_back(car.x);
       track.v.push_back(car.v);
@@ -144,6 +147,7 @@ class Loop {
   bool over_ = false;
   double peak_y_ = -std::numeric_limits<double>::infinity();
   Trajectory path_;
+  Observation observation_;
 };
 
 // Not at fault: run into from behind by a car of the lane the ego's body has
@@ -181,7 +185,7 @@ Rollout simulate(const Scenario& scene, const planner::ClosedLoopPlanner& planne
   out.outcome = judge(t, config, out.reason);
   if (hit) {
     out.collision_at_fault = at_fault(t, scene, *hit);
-    out.reason = "collision with the " + std::string(to_string(hit->car)) + " at " +
+    out.reason = "collision with the " + scene.cars[hit->car].id + " at " +
                  std::to_string(hit->time) + " s" +
                  (out.collision_at_fault ? "" : " (run into from behind: not at fault)");
   }

@@ -92,7 +92,8 @@ TrafficPrediction read_prediction(const json& j, int steps, double dt) {
   reject_unknown(j, path, {"leader", "follower", "target"});
   TrafficPrediction out;
   out.dt = dt;
-  for (Car car : kAllCars) {
+  out.cars.resize(std::size(kRoles));
+  for (Role car : kRoles) {
     const std::string name(to_string(car));
     std::string car_path = path;
     car_path += ".";
@@ -378,7 +379,8 @@ TheirProblemCheck check_their_problem(const AuthorsRecord& r, const Config& conf
 TrafficPrediction their_prediction_on_our_grid(const AuthorsRecord& r) {
   TrafficPrediction out;
   out.dt = r.predicted_others.dt;
-  for (Car car : kAllCars) {
+  out.cars.resize(std::size(kRoles));
+  for (Role car : kRoles) {
     const auto i = static_cast<std::size_t>(car);
     const CarTrack& theirs = r.predicted_others.cars[i];
     CarTrack& track = out.cars[i];
@@ -430,7 +432,7 @@ AuthorsComparison compare_with_authors(const AuthorsRecord& r, const ExpertPlann
     c.their_first_cross_node = first_cross_node(r.solution, s);
     // Our prediction along their path against theirs.
     const TrafficPrediction along = prediction_along(s, config, r.solution);
-    for (Car car : kAllCars) {
+    for (Role car : kRoles) {
       const auto i = static_cast<std::size_t>(car);
       const CarTrack& mine = along.cars[i];
       const CarTrack& theirs = r.predicted_others.cars[i];
@@ -443,8 +445,8 @@ AuthorsComparison compare_with_authors(const AuthorsRecord& r, const ExpertPlann
       c.prediction_max_dx[i] = dx;
       c.prediction_max_dv[i] = dv;
     }
-    c.target_end_dx =
-        r.predicted_others.car(Car::Target).x.back() - along.car(Car::Target).x.back();
+    c.target_end_dx = r.predicted_others.car(s.index_of(Role::Target)).x.back() -
+                      along.car(s.index_of(Role::Target)).x.back();
 
     if (st.diagnose) {
       c.with_their_prediction =
@@ -529,6 +531,7 @@ std::vector<Quantile> quantiles(std::vector<double> values, const std::vector<do
   std::erase_if(values, [](double v) { return !std::isfinite(v); });
   std::sort(values.begin(), values.end());
   std::vector<Quantile> out;
+  out.reserve(qs.size());
   for (double q : qs) {
     out.push_back({q, values.empty() ? kNotANumber : run::nearest_rank_sorted(values, q)});
   }
@@ -569,9 +572,9 @@ AuthorsSummary summarize(const std::vector<AuthorsComparison>& all, double toler
       ++it->second;
     }
     gap.push_back(c.with_their_prediction.relative);
-    pl.push_back(c.prediction_max_dx[static_cast<std::size_t>(Car::Leader)]);
-    pf.push_back(c.prediction_max_dx[static_cast<std::size_t>(Car::Follower)]);
-    pt.push_back(c.prediction_max_dx[static_cast<std::size_t>(Car::Target)]);
+    pl.push_back(c.prediction_max_dx[static_cast<std::size_t>(Role::Leader)]);
+    pf.push_back(c.prediction_max_dx[static_cast<std::size_t>(Role::Follower)]);
+    pt.push_back(c.prediction_max_dx[static_cast<std::size_t>(Role::Target)]);
     tend.push_back(c.target_end_dx);
     if (!std::isfinite(c.relative_difference)) continue;
     ++s.both_solved;
@@ -645,7 +648,7 @@ json quantiles_json(const std::vector<Quantile>& qs) {
 
 void to_json(json& out, const AuthorsComparison& c) {
   json pdx = json::object(), pdv = json::object();
-  for (Car car : kAllCars) {
+  for (Role car : kRoles) {
     const auto i = static_cast<std::size_t>(car);
     pdx[std::string(to_string(car))] = run::number_or_null(c.prediction_max_dx[i]);
     pdv[std::string(to_string(car))] = run::number_or_null(c.prediction_max_dv[i]);

@@ -44,36 +44,41 @@ bool body_in_lane(double y, double ego_width, double lane_center, double lane_wi
 }
 
 TrafficModel::TrafficModel(const Scenario& scenario, const Config& config)
-    : behavior_(scenario.behavior),
-      lane_width_(scenario.lane_width),
+    : lane_width_(scenario.lane_width),
       vehicle_(scenario.vehicle),
       idm_(scenario.idm),
       speed_cap_(config.traffic_max_speed.value_or(std::numeric_limits<double>::infinity())),
       integration_(config.traffic_integration),
-      length_{scenario.size_of(Car::Leader).length, scenario.size_of(Car::Follower).length,
-              scenario.size_of(Car::Target).length},
-      cars_{scenario.leader, scenario.follower, scenario.target} {
-  if (behavior_ == Behavior::ConstantSpeed) {
-    for (auto& c : cars_) c.a = 0.0;
+      accel_(scenario.car_count(), 0.0) {
+  const std::size_t n = scenario.car_count();
+  behavior_.reserve(n);
+  lane_center_.reserve(n);
+  length_.reserve(n);
+  cars_.reserve(n);
+  for (CarIndex i = 0; i < n; ++i) {
+    behavior_.push_back(scenario.cars[i].behavior);
+    lane_center_.push_back(scenario.lane_center(i));
+    length_.push_back(scenario.size_of(i).length);
+    cars_.push_back(scenario.car(i));
+    if (behavior_.back() == Behavior::ConstantSpeed) cars_.back().a = 0.0;
   }
 }
 
-double TrafficModel::idm_accel_of(Car which, const EgoFootprint& ego) const {
-  const CarState& me = car(which);
-  const double my_lane = which == Car::Leader ? 0.0 : lane_width_;
+double TrafficModel::idm_accel_of(CarIndex which, const EgoFootprint& ego) const {
+  const CarState& me = cars_[which];
+  const double my_lane = lane_center_[which];
   double gap = std::numeric_limits<double>::infinity();
   double leader_speed = me.v;
   auto consider = [&](double x, double v, double length) {
-    const double g = x - me.x - 0.5 * (length_[index(which)] + length);
+    const double g = x - me.x - 0.5 * (length_[which] + length);
     if (x > me.x && g < gap) {
       gap = g;
       leader_speed = v;
     }
   };
-  for (Car other : kAllCars) {
-    const double other_lane = other == Car::Leader ? 0.0 : lane_width_;
-    if (other != which && other_lane == my_lane) {
-      consider(car(other).x, car(other).v, length_[index(other)]);
+  for (CarIndex other = 0; other < cars_.size(); ++other) {
+    if (other != which && lane_center_[other] == my_lane) {
+      consider(cars_[other].x, cars_[other].v, length_[other]);
     }
   }
   if (body_in_lane(ego.y, vehicle_.width, my_lane, lane_width_)) {
@@ -82,27 +87,31 @@ double TrafficModel::idm_accel_of(Car which, const EgoFootprint& ego) const {
   return idm_acceleration(idm_, me.v, gap, leader_speed);
 }
 
-void TrafficModel::step(double dt, const EgoFootprint& ego) {
-  if (behavior_ == Behavior::Idm) {
-    std::array<double, 3> accel{};
-    for (Car c : kAllCars) accel[index(c)] = idm_accel_of(c, ego);
-    for (Car c : kAllCars) cars_[index(c)].a = accel[index(c)];
+// Ballistic update with a stop instead of reversing (Treiber and Kesting).
+void TrafficModel::advance_idm(CarState& c, double dt) const {
+  if (integration_ == TrafficIntegration::Euler) {
+    c.v = std::max(0.0, c.v + c.a * dt);
+    c.x += c.v * dt;
+  } else if (c.v + c.a * dt < 0.0) {
+    c.x += c.v * c.v / (2.0 * std::max(-c.a, 1e-9));
+    c.v = 0.0;
+  } else {
+    c.x += c.v * dt + 0.5 * c.a * dt * dt;
+    c.v += c.a * dt;
   }
-  for (auto& c : cars_) {
-    if (behavior_ == Behavior::Idm) {
-      // Ballistic update with a stop instead of reversing (Treiber and Kesting).
-      if (integration_ == TrafficIntegration::Euler) {
-        c.v = std::max(0.0, c.v + c.a * dt);
-        c.x += c.v * dt;
-      } else if (c.v + c.a * dt < 0.0) {
-        c.x += c.v * c.v / (2.0 * std::max(-c.a, 1e-9));
-        c.v = 0.0;
-      } else {
-        c.x += c.v * dt + 0.5 * c.a * dt * dt;
-        c.v += c.a * dt;
-      }
+}
+
+void TrafficModel::step(double dt, const EgoFootprint& ego) {
+  // Every IDM car reacts to the others where they are now, before any moves.
+  for (CarIndex i = 0; i < cars_.size(); ++i) {
+    if (behavior_[i] == Behavior::Idm) accel_[i] = idm_accel_of(i, ego);
+  }
+  for (CarIndex i = 0; i < cars_.size(); ++i) {
+    if (behavior_[i] == Behavior::Idm) {
+      cars_[i].a = accel_[i];
+      advance_idm(cars_[i], dt);
     } else {
-      advance_constant_accel(c, dt, speed_cap_);
+      advance_constant_accel(cars_[i], dt, speed_cap_);
     }
   }
   time_ += dt;
@@ -113,16 +122,16 @@ TrafficPrediction predict_traffic(const Scenario& scenario, const Config& config
   TrafficModel model(scenario, config);
   TrafficPrediction out;
   out.dt = dt;
+  out.cars.resize(scenario.car_count());
   for (auto& track : out.cars) {
     track.x.reserve(steps + 1);
     track.v.reserve(steps + 1);
     track.a.reserve(steps + 1);
   }
   auto record = [&] {
-    for (Car c : kAllCars) {
-      auto& track = out.cars[static_cast<std::size_t>(c)];
-      track.x.push_back(model.car(c).x);
-      track.v.push_back(model.car(c).v);
+    for (CarIndex i = 0; i < out.cars.size(); ++i) {
+      out.cars[i].x.push_back(model.car(i).x);
+      out.cars[i].v.push_back(model.car(i).v);
     }
   };
   record();
@@ -130,7 +139,7 @@ TrafficPrediction predict_traffic(const Scenario& scenario, const Config& config
     EgoFootprint ego{scenario.ego.x + scenario.ego.v * k * dt, scenario.ego.y, scenario.ego.v};
     if (ego_path != nullptr && k < static_cast<int>(ego_path->size())) ego = (*ego_path)[k];
     model.step(dt, ego);
-    for (Car c : kAllCars) out.cars[static_cast<std::size_t>(c)].a.push_back(model.car(c).a);
+    for (CarIndex i = 0; i < out.cars.size(); ++i) out.cars[i].a.push_back(model.car(i).a);
     record();
   }
   for (auto& track : out.cars) track.a.push_back(track.a.empty() ? 0.0 : track.a.back());

@@ -1,5 +1,6 @@
 #include "lanechange/audit.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 
@@ -88,7 +89,8 @@ std::vector<std::string> audit_trajectory(const Trajectory& tr, const Scenario& 
   std::vector<std::string> problems;
   const int n = tr.nodes();
   if (n == 0 || static_cast<int>(tr.ego.size()) != n || static_cast<int>(tr.controls.size()) != n ||
-      tr.others.nodes() != n) {
+      std::any_of(tr.others.cars.begin(), tr.others.cars.end(),
+                  [n](const CarTrack& c) { return static_cast<int>(c.x.size()) != n; })) {
     problems.emplace_back("the arrays do not all have the same, non-zero length");
     return problems;
   }

@@ -14,6 +14,15 @@ std::vector<double> Trajectory::ys() const {
   return out;
 }
 
+std::vector<TrackedCar> tracked_cars(const Scenario& s) {
+  std::vector<TrackedCar> out;
+  out.reserve(s.car_count());
+  for (CarIndex i = 0; i < s.car_count(); ++i) {
+    out.push_back({s.cars[i].id, s.cars[i].lane, s.size_of(i)});
+  }
+  return out;
+}
+
 Trajectory failed_trajectory(std::string planner, const Scenario& scenario, std::string reason) {
   Trajectory t;
   t.planner = std::move(planner);
@@ -25,12 +34,11 @@ Trajectory failed_trajectory(std::string planner, const Scenario& scenario, std:
   t.ego = {scenario.ego};
   t.controls = {EgoControl{}};
   t.others.dt = t.dt;
-  for (Car c : kAllCars) {
-    auto& track = t.others.cars[static_cast<std::size_t>(c)];
-    track.x = {scenario.car(c).x};
-    track.v = {scenario.car(c).v};
-    track.a = {scenario.car(c).a};
+  for (CarIndex c = 0; c < scenario.car_count(); ++c) {
+    const CarState& car = scenario.car(c);
+    t.others.cars.push_back({{car.x}, {car.v}, {car.a}});
   }
+  t.cars = tracked_cars(scenario);
   return t;
 }
 
@@ -91,10 +99,16 @@ json trajectory_to_json(const Trajectory& tr) {
                 {"theta", column(tr.ego, [](const EgoState& s) { return s.theta; })},
                 {"a", a},
                 {"omega", omega}};
-  json others = json::object();
-  for (Car c : kAllCars) {
-    const auto& track = tr.others.car(c);
-    others[std::string(to_string(c))] = {{"x", track.x}, {"v", track.v}};
+  json others = json::array();
+  for (CarIndex c = 0; c < tr.others.car_count(); ++c) {
+    const TrackedCar& who = c < tr.cars.size() ? tr.cars[c] : TrackedCar{};
+    const CarTrack& track = tr.others.car(c);
+    others.push_back({{"id", who.id},
+                      {"lane", to_string(who.lane)},
+                      {"length", who.size.length},
+                      {"width", who.size.width},
+                      {"x", track.x},
+                      {"v", track.v}});
   }
   out["others"] = others;
   out["collision"] = tr.collision;
@@ -102,12 +116,72 @@ json trajectory_to_json(const Trajectory& tr) {
   return out;
 }
 
+namespace {
+
+CarTrack read_track(const json& car, const std::string& path, std::size_t nodes) {
+  CarTrack track;
+  track.x = read_array(car, path, "x", nodes);
+  track.v = read_array(car, path, "v", nodes);
+  track.a.assign(nodes, 0.0);
+  return track;
+}
+
+TrackedCar read_tracked_car(const json& car, const std::string& path) {
+  TrackedCar who;
+  detail::read_value(car.value("id", json()), detail::join_path(path, "id"), who.id);
+  std::string lane;
+  detail::read_value(car.value("lane", json()), detail::join_path(path, "lane"), lane);
+  if (lane != "ego" && lane != "target") {
+    throw InputError(detail::join_path(path, "lane"), "must be \"ego\" or \"target\"");
+  }
+  who.lane = lane == "ego" ? Lane::Ego : Lane::Target;
+  detail::read_value(car.value("length", json()), detail::join_path(path, "length"),
+                     who.size.length);
+  detail::read_value(car.value("width", json()), detail::join_path(path, "width"), who.size.width);
+  if (!(who.size.length > 0.0) || !(who.size.width > 0.0)) {
+    throw InputError(detail::join_path(path, "length"), "a car's body must be positive");
+  }
+  return who;
+}
+
+// Format 1 keys the paper's three cars by role and gives no bodies: each has
+// the default one.
+void read_others(const json& in, bool three_cars, std::size_t nodes, Trajectory& tr) {
+  tr.others.dt = tr.dt;
+  if (three_cars) {
+    const json& others = object_at(in, "", "others");
+    for (const Role role : kRoles) {
+      const std::string name(to_string(role));
+      tr.others.cars.push_back(
+          read_track(object_at(others, "others", name.c_str()), "others." + name, nodes));
+      tr.cars.push_back({name, role == Role::Leader ? Lane::Ego : Lane::Target, VehicleSize{}});
+    }
+    return;
+  }
+  auto it = in.find("others");
+  if (it == in.end() || !it->is_array()) throw InputError("others", "must be an array");
+  for (std::size_t i = 0; i < it->size(); ++i) {
+    std::string path = "others[";
+    path += std::to_string(i);
+    path += ']';
+    const json& car = (*it)[i];
+    if (!car.is_object()) throw InputError(path, "must be an object");
+    tr.cars.push_back(read_tracked_car(car, path));
+    tr.others.cars.push_back(read_track(car, path, nodes));
+  }
+}
+
+}  // namespace
+
 Trajectory trajectory_from_json(const json& in) {
   if (!in.is_object()) throw InputError("", "a trajectory must be a JSON object");
   Trajectory tr;
   auto format = in.find("format");
-  if (format == in.end() || !format->is_string() || *format != kTrajectoryFormat) {
-    throw InputError("format", "must be \"" + std::string(kTrajectoryFormat) + "\"");
+  const bool three_cars =
+      format != in.end() && format->is_string() && *format == kTrajectoryFormatThreeCars;
+  if (!three_cars && (format == in.end() || !format->is_string() || *format != kTrajectoryFormat)) {
+    throw InputError("format", "must be \"" + std::string(kTrajectoryFormat) + "\" or \"" +
+                                   std::string(kTrajectoryFormatThreeCars) + "\"");
   }
   tr.details = in;
   for (const char* k : {"format", "planner", "label", "reason", "dt", "lane_width", "t", "ego",
@@ -133,16 +207,7 @@ Trajectory trajectory_from_json(const json& in) {
     tr.ego.push_back({x[k], y[k], v[k], th[k], a[k]});
     tr.controls.push_back({a[k], w[k]});
   }
-  const json& others = object_at(in, "", "others");
-  tr.others.dt = tr.dt;
-  for (Car c : kAllCars) {
-    const std::string name(to_string(c));
-    const json& car = object_at(others, "others", name.c_str());
-    auto& track = tr.others.cars[static_cast<std::size_t>(c)];
-    track.x = read_array(car, "others." + name, "x", n);
-    track.v = read_array(car, "others." + name, "v", n);
-    track.a.assign(n, 0.0);
-  }
+  read_others(in, three_cars, n, tr);
   if (in.contains("collision")) detail::read_value(in["collision"], "collision", tr.collision);
   if (in.contains("compute_ms") && in["compute_ms"].is_object()) {
     const json& ms = in["compute_ms"];

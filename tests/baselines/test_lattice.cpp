@@ -54,7 +54,7 @@ planner::Observation observe(const Scenario& s) {
   planner::Observation o;
   o.scene = &s;
   o.ego = s.ego;
-  o.cars = {s.leader, s.follower, s.target};
+  o.cars = {s.leader(), s.follower(), s.target()};
   return o;
 }
 
@@ -107,8 +107,8 @@ TEST(Lattice, ACandidateIntoACarIsInvalid) {
 // Either side of each target-lane car will do, at its Eq. 1 distance.
 TEST(SafeDistances, HoldOnEitherSideOfEachCar) {
   Scenario s = testing::open_road_scenario();
-  s.target = {-30.0, 8.0, 0.0};  // far behind the ego, in the target lane
-  s.follower = {-60.0, 8.0, 0.0};
+  s.target() = {-30.0, 8.0, 0.0};  // far behind the ego, in the target lane
+  s.follower() = {-60.0, 8.0, 0.0};
   const Config config;
   const auto cars = baselines::predict_from(observe(s), config, 10);
   // The ego already in the target lane, holding its speed: far ahead of both.
@@ -116,11 +116,11 @@ TEST(SafeDistances, HoldOnEitherSideOfEachCar) {
   for (int k = 0; k <= 10; ++k) path.push_back({8.0 * 0.1 * k, s.lane_width, 8.0, 0.0, 0.0});
   EXPECT_TRUE(baselines::keeps_target_lane_distances(path, cars, s));
   // Between the two, at their safe distances.
-  s.target = {40.0, 8.0, 0.0};
+  s.target() = {40.0, 8.0, 0.0};
   const auto between = baselines::predict_from(observe(s), config, 10);
   EXPECT_TRUE(baselines::keeps_target_lane_distances(path, between, s));
   // Ahead of the target by less than 8.4 m + 0.5 s x its speed.
-  s.target = {-8.0, 8.0, 0.0};
+  s.target() = {-8.0, 8.0, 0.0};
   const auto close_behind = baselines::predict_from(observe(s), config, 10);
   EXPECT_FALSE(baselines::keeps_target_lane_distances(path, close_behind, s));
 }

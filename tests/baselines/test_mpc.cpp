@@ -44,9 +44,9 @@ struct ProgramAtAPoint {
     Scenario s = testing::open_road_scenario();
     s.steps = 8;
     s.horizon = 0.8;
-    s.follower = {-4.0, 8.0, 0.0};
-    s.target = {9.0, 8.0, 0.0};
-    s.leader = {8.0, 7.0, 0.0};
+    s.follower() = {-4.0, 8.0, 0.0};
+    s.target() = {9.0, 8.0, 0.0};
+    s.leader() = {8.0, 7.0, 0.0};
     const baselines::MpcPlan guess = baselines::cold_guess(s);
     nlp->update(baselines::build_mpc_problem(s, config, guess), guess);
     Ipopt::TNLP::IndexStyleEnum style{};
@@ -173,10 +173,10 @@ TEST(Mpc, StaysInItsLaneWithoutCollisionWhereThereIsNoGap) {
 TEST(Mpc, ATrucksCirclesKeepTheirOwnClearance) {
   const Config config;
   Scenario s = testing::open_road_scenario();
-  s.leader = {12.0, 8.0, 0.0};
+  s.leader() = {12.0, 8.0, 0.0};
   const baselines::MpcPlan guess = baselines::cold_guess(s);
   const auto car = baselines::build_mpc_problem(s, config, guess);
-  s.car_size[static_cast<std::size_t>(Car::Leader)] = VehicleSize{12.0, 2.5};
+  s.cars[car_of(Role::Leader)].size = VehicleSize{12.0, 2.5};
   const auto truck = baselines::build_mpc_problem(s, config, guess);
   const auto widest = [](const baselines::MpcProblemData& d) {
     double out = 0.0;
@@ -218,7 +218,7 @@ TEST(Mpc, ASolveFromTheShiftedSolutionIsFasterThanFromScratch) {
   const auto first = baselines::solve_mpc(solver, s, config, cold);
   ASSERT_EQ(first.status, baselines::MpcStatus::Solved) << first.message;
   s.ego = step_exact(s.ego, first.plan.controls[0], config.dt());
-  for (const Car c : kAllCars) s.car(c).x += s.car(c).v * config.dt();
+  for (CarIndex c = 0; c < 3; ++c) s.car(c).x += s.car(c).v * config.dt();
   const auto warm = baselines::shifted(first.plan, 1, s.steps, config.dt(), s.ego);
   const auto second = baselines::solve_mpc(solver, s, config, warm);
   ASSERT_EQ(second.status, baselines::MpcStatus::Solved) << second.message;

@@ -76,9 +76,10 @@ TEST(Formulation, WarmStartMeetsItsBoundaryConditions) {
   EXPECT_NEAR(w.states.front()[kV], s.ego.v, 1e-9);
   // Aimed behind the target by its safe distance, at the target's speed.
   const SafeDistance& d = s.safe_distance.target;
-  EXPECT_NEAR(w.states.back()[kX],
-              prediction.car(Car::Target).x.back() - d.standstill - d.time_headway * s.target.v,
-              1e-6);
+  EXPECT_NEAR(
+      w.states.back()[kX],
+      prediction.car(car_of(Role::Target)).x.back() - d.standstill - d.time_headway * s.target().v,
+      1e-6);
 }
 
 // Timed to lane modes, the warm start's body first touches the line at the
@@ -368,7 +369,7 @@ INSTANTIATE_TEST_SUITE_P(SampledScenarios, CrossCheck,
 
 TEST(FastSolver, ReportsAnInitialStateThatBreaksTheRules) {
   Scenario s = open_road_scenario();
-  s.leader.x = 6.0;  // closer than the safe distance, though not touching
+  s.leader().x = 6.0;  // closer than the safe distance, though not touching
   Config config;
   config.expert.constrain_initial_node = true;
   const LaneChangeQp qp = first_round_problem(s, config);
@@ -478,9 +479,9 @@ void expect_audit_passes(const Trajectory& t, const Scenario& s, const Config& c
 TEST(Planner, AnEgoAboveItsSpeedBoundMeetsItAsSoonAsItCan) {
   Scenario s = open_road_scenario();
   s.ego.v = 19.0;
-  s.leader = {80.0, 19.0, 0.0};
-  s.follower = {-80.0, 19.0, 0.0};
-  s.target = {120.0, 19.0, 0.0};
+  s.leader() = {80.0, 19.0, 0.0};
+  s.follower() = {-80.0, 19.0, 0.0};
+  s.target() = {120.0, 19.0, 0.0};
   ASSERT_GT(s.ego.v, s.limits.v.hi);
   const ExpertPlanner planner(Config{}, std::make_shared<FastLaneChangeSolver>());
   const ExpertResult r = planner.plan(s);
@@ -500,9 +501,9 @@ TEST(Planner, AnEgoAboveItsSpeedBoundMeetsItAsSoonAsItCan) {
 
 TEST(Planner, AStartInsideTheLeadersSafeDistanceIsTheReasonGiven) {
   Scenario s = open_road_scenario();
-  s.leader = {6.0, 2.0, 0.0};  // 1.6 m bumper to bumper, far inside 8.4 m + 0.5 s
-  s.follower = {-2.0, 8.0, 0.0};
-  s.target = {3.0, 8.0, 0.0};  // and no gap beside
+  s.leader() = {6.0, 2.0, 0.0};  // 1.6 m bumper to bumper, far inside 8.4 m + 0.5 s
+  s.follower() = {-2.0, 8.0, 0.0};
+  s.target() = {3.0, 8.0, 0.0};  // and no gap beside
   const ExpertPlanner planner(Config{}, std::make_shared<FastLaneChangeSolver>());
   const ExpertResult r = planner.plan(s);
   ASSERT_EQ(r.status, PlanStatus::Infeasible) << r.reason;
@@ -676,7 +677,7 @@ void expect_only_the_gap(const Scenario& s, const Gap& expected) {
   const ExpertPlanner best(Config{}, std::make_shared<FastLaneChangeSolver>());
   const ExpertResult r = best.plan(s);
   ASSERT_EQ(r.status, PlanStatus::Converged) << r.reason;
-  EXPECT_EQ(describe(r.gap), describe(expected));
+  EXPECT_EQ(describe(s, r.gap), describe(s, expected));
   const Trajectory t = best.to_trajectory(r, s);
   EXPECT_EQ(t.label, Label::WellPosed) << t.reason;
   EXPECT_FALSE(t.collision);
@@ -693,11 +694,11 @@ void expect_only_the_gap(const Scenario& s, const Gap& expected) {
 TEST(Planner, TakesTheOnlyOpenGapAheadOfTheTarget) {
   Scenario s = open_road_scenario();
   s.ego.v = 10.0;
-  s.leader = {40.0, 10.0, 0.0};
-  s.follower = {-20.0, 8.0, 0.0};
-  s.target = {-10.0, 8.0, 0.0};
+  s.leader() = {40.0, 10.0, 0.0};
+  s.follower() = {-20.0, 8.0, 0.0};
+  s.target() = {-10.0, 8.0, 0.0};
   validate_scenario(s);
-  expect_only_the_gap(s, {{Car::Follower, Car::Target}, {}});
+  expect_only_the_gap(s, {{car_of(Role::Follower), car_of(Role::Target)}, {}});
 }
 
 // Both faster than the ego and too close together: only the gap behind the
@@ -705,28 +706,28 @@ TEST(Planner, TakesTheOnlyOpenGapAheadOfTheTarget) {
 TEST(Planner, TakesTheOnlyOpenGapBehindTheFollower) {
   Scenario s = open_road_scenario();
   s.ego.v = 10.0;
-  s.leader = {50.0, 10.0, 0.0};
-  s.follower = {5.0, 14.0, 0.0};
-  s.target = {15.0, 14.0, 0.0};
+  s.leader() = {50.0, 10.0, 0.0};
+  s.follower() = {5.0, 14.0, 0.0};
+  s.target() = {15.0, 14.0, 0.0};
   validate_scenario(s);
-  expect_only_the_gap(s, {{}, {Car::Follower, Car::Target}});
+  expect_only_the_gap(s, {{}, {car_of(Role::Follower), car_of(Role::Target)}});
 }
 
 TEST(Gaps, FixedIsThePapersAndBestListsEveryPlaceFromTheBack) {
   const Scenario s = open_road_scenario();
   const std::vector<Gap> fixed = target_lane_gaps(s, GapChoice::Fixed);
   ASSERT_EQ(fixed.size(), 1U);
-  EXPECT_EQ(fixed[0], paper_gap());
+  EXPECT_EQ(fixed[0], paper_gap(s));
   const std::vector<Gap> best = target_lane_gaps(s, GapChoice::Best);
   ASSERT_EQ(best.size(), 3U);
-  EXPECT_EQ(describe(best[0]), "none-follower");
-  EXPECT_EQ(describe(best[1]), "follower-target");
-  EXPECT_EQ(best[1], paper_gap());
-  EXPECT_EQ(describe(best[2]), "target-none");
+  EXPECT_EQ(describe(s, best[0]), "none-follower");
+  EXPECT_EQ(describe(s, best[1]), "follower-target");
+  EXPECT_EQ(best[1], paper_gap(s));
+  EXPECT_EQ(describe(s, best[2]), "target-none");
   // Order is by position, not by role.
   Scenario swapped = s;
-  std::swap(swapped.follower, swapped.target);
-  EXPECT_EQ(describe(target_lane_gaps(swapped, GapChoice::Best)[1]), "target-follower");
+  std::swap(swapped.follower(), swapped.target());
+  EXPECT_EQ(describe(swapped, target_lane_gaps(swapped, GapChoice::Best)[1]), "target-follower");
 }
 
 // Restricted to Eq. 1's gap, the gap-choosing planner gives the fixed
@@ -735,12 +736,12 @@ TEST(Planner, OnlyThePapersGapPlansAsTheFixedGap) {
   const ScenarioSampler sampler(Config{}, 31);
   const ExpertPlanner best(Config{}, std::make_shared<FastLaneChangeSolver>());
   const ExpertPlanner fixed(fixed_gap_config(), std::make_shared<FastLaneChangeSolver>());
-  const Gap gap = paper_gap();
-  PlanHints only_paper;
-  only_paper.gap = &gap;
   int converged = 0;
   for (std::uint64_t i = 0; i < 12; ++i) {
     const Scenario s = sampler.sample(i);
+    const Gap gap = paper_gap(s);
+    PlanHints only_paper;
+    only_paper.gap = &gap;
     const ExpertResult paper = fixed.plan(s);
     const ExpertResult replay = best.plan(s, {}, only_paper);
     ASSERT_EQ(replay.status, paper.status) << "scenario " << i;
@@ -915,8 +916,106 @@ TEST(Audit, CatchesTamperedPlans) {
   relabelled.label = Label::IllPosed;
   EXPECT_FALSE(audit_trajectory(relabelled, s, Config{}).empty());
   Trajectory crashed = good;
-  crashed.others.cars[static_cast<int>(Car::Target)].x.assign(good.nodes(), good.ego.back().x);
+  crashed.others.cars[car_of(Role::Target)].x.assign(good.nodes(), good.ego.back().x);
   EXPECT_FALSE(audit_trajectory(crashed, s, Config{}).empty());
+}
+
+}  // namespace
+}  // namespace lanechange::expert
+
+namespace lanechange::expert {
+namespace {
+
+// A format-1 scene written as format 2: the same cars, in a different order,
+// each with its id, lane and role.
+nlohmann::json as_format_2(const nlohmann::json& one) {
+  nlohmann::json two = one;
+  for (const char* key : {"lane_width", "leader", "follower", "target"}) two.erase(key);
+  two["format"] = "lanechange.scenario/2";
+  two["road"] = {{"lane_width", one["lane_width"]}, {"target_lane", "left"}};
+  two["cars"] = nlohmann::json::array();
+  for (const char* role : {"target", "leader", "follower"}) {
+    nlohmann::json car = one[role];
+    car["id"] = role;
+    car["role"] = role;
+    car["lane"] = std::string(role) == "leader" ? "ego" : "target";
+    two["cars"].push_back(car);
+  }
+  return two;
+}
+
+TEST(Planner, AFormat1FileAndItsFormat2TranslationPlanAlike) {
+  const ScenarioSampler sampler(Config{}, 43);
+  for (const Config& config : {Config{}, fixed_gap_config()}) {
+    const ExpertPlanner planner(config, std::make_shared<FastLaneChangeSolver>());
+    for (std::uint64_t i = 0; i < 6; ++i) {
+      const nlohmann::json one = scenario_to_json(sampler.sample(i));
+      const Scenario s1 = scenario_from_json(one, config);
+      const Scenario s2 = scenario_from_json(as_format_2(one), config);
+      ASSERT_EQ(s2.cars[0].id, "target");
+      const ExpertResult r1 = planner.plan(s1);
+      const ExpertResult r2 = planner.plan(s2);
+      ASSERT_EQ(r1.status, r2.status) << i;
+      if (r1.status != PlanStatus::Converged) continue;
+      EXPECT_NEAR(r1.objective, r2.objective, 1e-9 * (1.0 + std::abs(r1.objective))) << i;
+      const Trajectory t1 = planner.to_trajectory(r1, s1);
+      const Trajectory t2 = planner.to_trajectory(r2, s2);
+      EXPECT_EQ(t1.label, t2.label) << i;
+      ASSERT_EQ(t1.nodes(), t2.nodes());
+      for (int k = 0; k < t1.nodes(); ++k) {
+        EXPECT_NEAR(t1.ego[k].x, t2.ego[k].x, 1e-6) << i << " node " << k;
+        EXPECT_NEAR(t1.ego[k].y, t2.ego[k].y, 1e-6) << i << " node " << k;
+      }
+      EXPECT_EQ(t1.details.at("gap"), t2.details.at("gap")) << i;
+    }
+  }
+}
+
+// Eight cars in the target lane, one open gap among them: the exact plan
+// goes through it, and names the cars around it.
+TEST(Planner, FindsTheOneOpenGapAmongEightCars) {
+  nlohmann::json j = scenario_to_json(testing::dense_scenario(8, -40.0, 8.0));
+  for (std::size_t i = 5; i < j["cars"].size(); ++i) {
+    j["cars"][i]["x"] = j["cars"][i]["x"].get<double>() + 30.0;
+  }
+  const Scenario s = scenario_from_json(j, Config{});
+  const ExpertPlanner planner(Config{}, std::make_shared<FastLaneChangeSolver>());
+  const ExpertResult r = planner.plan(s);
+  ASSERT_EQ(r.status, PlanStatus::Converged) << r.reason;
+  EXPECT_EQ(describe(s, r.gap), "t2-t3");
+  const Trajectory t = planner.to_trajectory(r, s);
+  EXPECT_EQ(t.label, Label::WellPosed) << t.reason;
+  EXPECT_FALSE(t.collision);
+  EXPECT_EQ(t.details.at("gap").at("behind"), "t2");
+  expect_audit_passes(t, s, Config{});
+  // The paper's gap (the nearest cars, t4 and t5 here) is closed.
+  const ExpertPlanner fixed(fixed_gap_config(), std::make_shared<FastLaneChangeSolver>());
+  EXPECT_NE(fixed.plan(s).status, PlanStatus::Converged);
+}
+
+// A car behind the ego in its own lane keeps its distance too while the ego
+// is in that lane: braking hard in front of it is not a plan.
+TEST(Planner, KeepsTheDistanceToACarBehindInTheEgoLane) {
+  Scenario s = testing::dense_scenario(0);
+  const ExpertPlanner planner(Config{}, std::make_shared<FastLaneChangeSolver>());
+  const ExpertResult free = planner.plan(s);
+  ASSERT_EQ(free.status, PlanStatus::Converged) << free.reason;
+  // The car behind, 20 m back and 5 m/s faster, closes in on an ego that
+  // would keep its speed in its lane.
+  const CarIndex rear_car = *s.find("rear");
+  s.car(rear_car) = {-20.0, 14.0, 0.0};
+  const ExpertResult closing = planner.plan(s);
+  ASSERT_EQ(closing.status, PlanStatus::Converged) << closing.reason;
+  const Trajectory t = planner.to_trajectory(closing, s);
+  const SafeDistance d = s.centre_safe_distance(rear_car, s.safe_distance.follower);
+  const CarTrack& rear = t.others.car(rear_car);
+  int checked = 0;
+  for (int k = 1; k < t.nodes(); ++k) {
+    if (t.ego[k].y >= s.lane_width / 2) continue;  // the centre decides under every lane rule
+    ++checked;
+    EXPECT_GE(t.ego[k].x - rear.x[k], d.standstill + d.time_headway * rear.v[k] - 1e-4) << k;
+  }
+  EXPECT_GT(checked, 0);
 }
 
 }  // namespace

@@ -77,18 +77,18 @@ TEST(Labeller, NotReachingTheTargetLaneIsFailure) {
 
 TEST(Collision, FindsTheFirstContactWithAPredictedCar) {
   Scenario s = scenario_from_json(testing::example_scenario_json(), Config{});
-  s.leader = {20.0, 0.0, 0.0};  // a stopped car 20 m ahead in the ego lane
+  s.leader() = {20.0, 0.0, 0.0};  // a stopped car 20 m ahead in the ego lane
   const TrafficPrediction others = predict_traffic(s, Config{}, 20, 0.1);
   std::vector<EgoState> ego;
   for (int k = 0; k <= 20; ++k) ego.push_back({10.0 * k * 0.1, 0.0, 10.0, 0.0, 0.0});
   // The bumpers touch once the ego has covered 20 - 4.4 = 15.6 m: after 1.56 s.
   const auto hit = first_collision(ego, others, s);
   ASSERT_TRUE(hit.has_value());
-  EXPECT_EQ(hit->car, Car::Leader);
+  EXPECT_EQ(hit->car, car_of(Role::Leader));
   EXPECT_NEAR(hit->time, 1.575, 0.03);
   // The same drive in the other lane misses the leader and the target-lane cars.
-  s.follower = {-50.0, 0.0, 0.0};
-  s.target = {60.0, 0.0, 0.0};
+  s.follower() = {-50.0, 0.0, 0.0};
+  s.target() = {60.0, 0.0, 0.0};
   const TrafficPrediction clear = predict_traffic(s, Config{}, 20, 0.1);
   for (auto& e : ego) e.y = s.lane_width;
   EXPECT_FALSE(first_collision(ego, clear, s).has_value());
@@ -96,8 +96,8 @@ TEST(Collision, FindsTheFirstContactWithAPredictedCar) {
 
 TEST(Collision, ACarsOwnSizeDecidesContact) {
   Scenario s = scenario_from_json(testing::example_scenario_json(), Config{});
-  s.leader = {20.0, 0.0, 0.0};
-  s.car_size[static_cast<std::size_t>(Car::Leader)] = VehicleSize{12.0, 2.5};  // a truck
+  s.leader() = {20.0, 0.0, 0.0};
+  s.cars[car_of(Role::Leader)].size = VehicleSize{12.0, 2.5};  // a truck
   const TrafficPrediction others = predict_traffic(s, Config{}, 20, 0.1);
   std::vector<EgoState> ego;
   for (int k = 0; k <= 20; ++k) ego.push_back({10.0 * k * 0.1, 0.0, 10.0, 0.0, 0.0});
@@ -109,7 +109,7 @@ TEST(Collision, ACarsOwnSizeDecidesContact) {
   const double beside = 0.5 * (s.vehicle.width + 2.5) - 0.05;
   for (auto& e : ego) e.y = beside;
   EXPECT_TRUE(first_collision(ego, others, s).has_value());
-  s.car_size[static_cast<std::size_t>(Car::Leader)].reset();
+  s.cars[car_of(Role::Leader)].size.reset();
   EXPECT_FALSE(first_collision(ego, predict_traffic(s, Config{}, 20, 0.1), s).has_value());
 }
 

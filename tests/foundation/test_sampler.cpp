@@ -36,12 +36,13 @@ TEST(Sampler, FollowsTheDocumentedDistribution) {
   for (std::uint64_t i = 0; i < 600; ++i) {
     const Scenario s = sampler.sample(i);
     ++by_behavior[static_cast<int>(s.behavior)];
-    EXPECT_TRUE(config.sampler.leader_speed.contains(s.leader.v));
-    EXPECT_TRUE(config.sampler.follower_speed.contains(s.follower.v));
-    EXPECT_GE((s.leader.x - s.ego.x) / s.ego.v, 3.0 - 1e-9) << "three-second rule broken at " << i;
-    EXPECT_GT(s.target.x - s.follower.x, s.vehicle.length);
+    EXPECT_TRUE(config.sampler.leader_speed.contains(s.leader().v));
+    EXPECT_TRUE(config.sampler.follower_speed.contains(s.follower().v));
+    EXPECT_GE((s.leader().x - s.ego.x) / s.ego.v, 3.0 - 1e-9)
+        << "three-second rule broken at " << i;
+    EXPECT_GT(s.target().x - s.follower().x, s.vehicle.length);
     if (s.behavior != Behavior::ConstantAccel) {
-      EXPECT_EQ(s.leader.a, 0.0);
+      EXPECT_EQ(s.leader().a, 0.0);
     }
     EXPECT_NO_THROW(validate_scenario(s));
   }
@@ -53,7 +54,7 @@ TEST(Sampler, FixedBehaviorKeepsTheCars) {
   const Scenario idm = sampler.sample(4, Behavior::Idm);
   const Scenario cs = sampler.sample(4, Behavior::ConstantSpeed);
   EXPECT_EQ(idm.behavior, Behavior::Idm);
-  EXPECT_DOUBLE_EQ(idm.target.x, cs.target.x);
+  EXPECT_DOUBLE_EQ(idm.target().x, cs.target().x);
   EXPECT_DOUBLE_EQ(idm.ego.v, cs.ego.v);
 }
 

@@ -11,7 +11,7 @@ namespace {
 
 Scenario two_lane_scene(Behavior behavior) {
   Scenario s = scenario_from_json(testing::example_scenario_json(), Config{});
-  s.behavior = behavior;
+  s.set_behavior(behavior);
   return s;
 }
 
@@ -34,17 +34,17 @@ TEST(Idm, ClosedLoopHoldsTheEquilibriumGapBehindTheEgo) {
   s.idm.desired_speed = 1e9;
   const double v = 8.0;
   const double gap = s.idm.min_gap + v * s.idm.time_headway;
-  s.follower = {0.0, v, 0.0};
-  s.target = {500.0, v, 0.0};
+  s.follower() = {0.0, v, 0.0};
+  s.target() = {500.0, v, 0.0};
   TrafficModel model(s, Config{});
-  EgoFootprint ego{s.follower.x + s.vehicle.length + gap, s.lane_width, v};
+  EgoFootprint ego{s.follower().x + s.vehicle.length + gap, s.lane_width, v};
   for (int k = 0; k < 100; ++k) {
     model.step(0.1, ego);
     ego.x += v * 0.1;
-    EXPECT_NEAR(model.car(Car::Follower).a, 0.0, 1e-9);
+    EXPECT_NEAR(model.car(car_of(Role::Follower)).a, 0.0, 1e-9);
   }
-  EXPECT_NEAR(ego.x - model.car(Car::Follower).x - s.vehicle.length, gap, 1e-9);
-  EXPECT_NEAR(model.car(Car::Follower).v, v, 1e-9);
+  EXPECT_NEAR(ego.x - model.car(car_of(Role::Follower)).x - s.vehicle.length, gap, 1e-9);
+  EXPECT_NEAR(model.car(car_of(Role::Follower)).v, v, 1e-9);
 }
 
 TEST(Idm, EquilibriumWithFiniteDesiredSpeed) {
@@ -61,26 +61,26 @@ TEST(Idm, PlatoonAtEquilibriumStaysThere) {
   const IdmParameters& p = s.idm;
   const double gap =
       (p.min_gap + v * p.time_headway) / std::sqrt(1.0 - std::pow(v / p.desired_speed, p.exponent));
-  s.target.v = s.follower.v = v;
-  s.target.x = s.follower.x + s.vehicle.length + gap;
+  s.target().v = s.follower().v = v;
+  s.target().x = s.follower().x + s.vehicle.length + gap;
   // The target has a free road, so it accelerates towards v0; predict only the
   // follower's first steps, where its gap and speed are still at equilibrium.
   TrafficModel model(s, Config{});
   model.step(0.1, {-1000.0, 0.0, 0.0});
-  EXPECT_NEAR(model.car(Car::Follower).a, 0.0, 1e-9);
+  EXPECT_NEAR(model.car(car_of(Role::Follower)).a, 0.0, 1e-9);
 }
 
 TEST(Idm, FollowerReactsToTheEgoOnlyOnceItsBodyIsInTheLane) {
   Scenario s = two_lane_scene(Behavior::Idm);
-  s.follower.x = -12.0;
+  s.follower().x = -12.0;
   const EgoFootprint ego_in_own_lane{0.0, 0.0, 8.0};
   const EgoFootprint ego_across{0.0, s.lane_width / 2.0, 8.0};
   TrafficModel ignoring(s, Config{});
   TrafficModel reacting(s, Config{});
   ignoring.step(0.1, ego_in_own_lane);
   reacting.step(0.1, ego_across);
-  EXPECT_LT(reacting.car(Car::Follower).a, ignoring.car(Car::Follower).a - 0.5);
-  EXPECT_DOUBLE_EQ(reacting.car(Car::Target).a, ignoring.car(Car::Target).a);
+  EXPECT_LT(reacting.car(car_of(Role::Follower)).a, ignoring.car(car_of(Role::Follower)).a - 0.5);
+  EXPECT_DOUBLE_EQ(reacting.car(car_of(Role::Target)).a, ignoring.car(car_of(Role::Target)).a);
   EXPECT_TRUE(body_in_lane(s.lane_width / 2.0 - 0.84, 1.7, s.lane_width, s.lane_width));
   EXPECT_FALSE(body_in_lane(s.lane_width / 2.0 - 0.86, 1.7, s.lane_width, s.lane_width));
 }
@@ -91,11 +91,11 @@ TEST(Idm, ALongerCarAheadLeavesAShorterGapAndBrakesItsFollower) {
   const EgoFootprint far_away{-1000.0, 0.0, 0.0};
   TrafficModel cars(s, config);
   cars.step(0.1, far_away);
-  s.car_size[static_cast<std::size_t>(Car::Target)] = VehicleSize{12.0, 2.5};
+  s.cars[car_of(Role::Target)].size = VehicleSize{12.0, 2.5};
   TrafficModel behind_a_truck(s, config);
   behind_a_truck.step(0.1, far_away);
-  EXPECT_LT(behind_a_truck.car(Car::Follower).a, cars.car(Car::Follower).a);
-  EXPECT_DOUBLE_EQ(behind_a_truck.car(Car::Target).a, cars.car(Car::Target).a);
+  EXPECT_LT(behind_a_truck.car(car_of(Role::Follower)).a, cars.car(car_of(Role::Follower)).a);
+  EXPECT_DOUBLE_EQ(behind_a_truck.car(car_of(Role::Target)).a, cars.car(car_of(Role::Target)).a);
 }
 
 TEST(ConstantAccel, ClampsAtZeroWithExactPosition) {
@@ -119,13 +119,13 @@ TEST(ConstantAccel, ClampsAtTheSpeedLimit) {
 // must keep a car's speed rather than cap it at a bound meant for the ego.
 TEST(ConstantSpeed, AFastCarKeepsItsSpeedWhateverTheCap) {
   Scenario s = two_lane_scene(Behavior::ConstantSpeed);
-  s.follower.v = 16.73;  // above the default cap of 60 km/h
+  s.follower().v = 16.73;  // above the default cap of 60 km/h
   const Config config;
   ASSERT_TRUE(config.traffic_max_speed.has_value());
-  ASSERT_GT(s.follower.v, *config.traffic_max_speed);
+  ASSERT_GT(s.follower().v, *config.traffic_max_speed);
   const TrafficPrediction p = predict_traffic(s, config, 50, 0.1);
-  EXPECT_DOUBLE_EQ(p.car(Car::Follower).v.back(), 16.73);
-  EXPECT_NEAR(p.car(Car::Follower).x.back(), s.follower.x + 16.73 * 5.0, 1e-9);
+  EXPECT_DOUBLE_EQ(p.car(car_of(Role::Follower)).v.back(), 16.73);
+  EXPECT_NEAR(p.car(car_of(Role::Follower)).x.back(), s.follower().x + 16.73 * 5.0, 1e-9);
 }
 
 TEST(ConstantAccel, ACarAboveTheCapIsNotSlowedAndNoCapMeansNone) {
@@ -134,33 +134,34 @@ TEST(ConstantAccel, ACarAboveTheCapIsNotSlowedAndNoCapMeansNone) {
   EXPECT_DOUBLE_EQ(above.v, 20.0);
   EXPECT_DOUBLE_EQ(above.x, 20.0);
   Scenario s = two_lane_scene(Behavior::ConstantAccel);
-  s.target.v = 15.0;
-  s.target.a = 2.0;
+  s.target().v = 15.0;
+  s.target().a = 2.0;
   Config uncapped;
   uncapped.traffic_max_speed.reset();
   const TrafficPrediction p = predict_traffic(s, uncapped, 50, 0.1);
-  EXPECT_NEAR(p.car(Car::Target).v.back(), 25.0, 1e-9);
+  EXPECT_NEAR(p.car(car_of(Role::Target)).v.back(), 25.0, 1e-9);
   const TrafficPrediction capped = predict_traffic(s, Config{}, 50, 0.1);
-  EXPECT_NEAR(capped.car(Car::Target).v.back(), 60.0 / 3.6, 1e-9);
+  EXPECT_NEAR(capped.car(car_of(Role::Target)).v.back(), 60.0 / 3.6, 1e-9);
 }
 
 TEST(ConstantAccel, PredictionMatchesClosedForm) {
   Scenario s = two_lane_scene(Behavior::ConstantAccel);
-  s.leader.a = 0.5;
+  s.leader().a = 0.5;
   const Config config;
   const TrafficPrediction p = predict_traffic(s, config, 50, 0.1);
   ASSERT_EQ(p.nodes(), 51);
   const double t = 5.0;
-  EXPECT_NEAR(p.car(Car::Leader).x.back(), s.leader.x + s.leader.v * t + 0.25 * t * t, 1e-9);
-  EXPECT_NEAR(p.car(Car::Leader).v.back(), s.leader.v + 0.5 * t, 1e-9);
+  EXPECT_NEAR(p.car(car_of(Role::Leader)).x.back(), s.leader().x + s.leader().v * t + 0.25 * t * t,
+              1e-9);
+  EXPECT_NEAR(p.car(car_of(Role::Leader)).v.back(), s.leader().v + 0.5 * t, 1e-9);
 }
 
 TEST(ConstantSpeed, IgnoresAccelerationFields) {
   Scenario s = two_lane_scene(Behavior::ConstantSpeed);
-  s.target.a = 2.0;
+  s.target().a = 2.0;
   const TrafficPrediction p = predict_traffic(s, Config{}, 10, 0.1);
-  EXPECT_NEAR(p.car(Car::Target).x.back(), s.target.x + s.target.v * 1.0, 1e-9);
-  EXPECT_DOUBLE_EQ(p.car(Car::Target).v.back(), s.target.v);
+  EXPECT_NEAR(p.car(car_of(Role::Target)).x.back(), s.target().x + s.target().v * 1.0, 1e-9);
+  EXPECT_DOUBLE_EQ(p.car(car_of(Role::Target)).v.back(), s.target().v);
 }
 
 }  // namespace

@@ -14,6 +14,7 @@
 #include <tuple>
 #include <vector>
 
+#include "../foundation/test_helpers.hpp"
 #include "lanechange/error.hpp"
 #include "lanechange/plot.hpp"
 
@@ -33,6 +34,9 @@ Trajectory lane_change(int nodes = 51) {
   tr.lane_width = kLaneWidth;
   tr.dt = nodes > 1 ? 5.0 / (nodes - 1) : 0.1;
   tr.others.dt = tr.dt;
+  tr.others.cars.resize(3);
+  tr.cars = {
+      {"leader", Lane::Ego, {}}, {"follower", Lane::Target, {}}, {"target", Lane::Target, {}}};
   const double speed = 8.0;
   for (int k = 0; k < nodes; ++k) {
     const double t = k * tr.dt, s = t / 5.0;
@@ -41,9 +45,9 @@ Trajectory lane_change(int nodes = 51) {
     tr.t.push_back(t);
     tr.ego.push_back({speed * t, y, speed, std::atan2(y_rate, speed), 0.0});
     tr.controls.push_back({});
-    for (auto [car, x0, v] :
-         {std::tuple{Car::Leader, 30.0, 7.0}, std::tuple{Car::Follower, -12.0, 9.0},
-          std::tuple{Car::Target, 20.0, 9.5}}) {
+    for (auto [car, x0, v] : {std::tuple{car_of(Role::Leader), 30.0, 7.0},
+                              std::tuple{car_of(Role::Follower), -12.0, 9.0},
+                              std::tuple{car_of(Role::Target), 20.0, 9.5}}) {
       auto& track = tr.others.cars[static_cast<std::size_t>(car)];
       track.x.push_back(x0 + v * t);
       track.v.push_back(v);
@@ -222,7 +226,7 @@ TEST(PlotScript, SingleNodeTrajectoryDrawsOneSnapshot) {
 
 TEST(PlotScript, RejectsMalformedInput) {
   Trajectory short_target = lane_change();
-  short_target.others.cars[static_cast<std::size_t>(Car::Target)].x.pop_back();
+  short_target.others.cars[car_of(Role::Target)].x.pop_back();
   EXPECT_THROW((void)trajectory_plot_script(short_target, "out.png"), InputError);
   Trajectory no_lane = lane_change();
   no_lane.lane_width = 0.0;

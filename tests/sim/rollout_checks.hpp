@@ -3,6 +3,7 @@
 // (docs/closed_loop.md), shared by the tests of our planners and the baselines.
 #include <gtest/gtest.h>
 
+#include "../foundation/test_helpers.hpp"
 #include "lanechange/checks.hpp"
 #include "lanechange/ego.hpp"
 #include "lanechange/sim/simulator.hpp"
@@ -28,8 +29,8 @@ inline void expect_consistent(const sim::Rollout& r, const Scenario& s) {
     EXPECT_NEAR(t.ego[k + 1].y, ego.y, 1e-9) << "step " << k;
     EXPECT_GE(t.ego[k + 1].v, s.limits.v.lo - 1e-9);
     EXPECT_LE(t.ego[k + 1].v, s.limits.v.hi + 1e-9);
-    for (const Car c : kAllCars) {
-      EXPECT_NEAR(t.others.car(c).x[k + 1], traffic.car(c).x, 1e-9) << to_string(c) << " " << k;
+    for (CarIndex c = 0; c < s.car_count(); ++c) {
+      EXPECT_NEAR(t.others.car(c).x[k + 1], traffic.car(c).x, 1e-9) << s.cars[c].id << " " << k;
     }
   }
   EXPECT_EQ(t.collision, first_collision(t.ego, t.others, s).has_value());

@@ -129,8 +129,8 @@ TEST(ClosedLoop, SampledRolloutsAreConsistent) {
 TEST(ClosedLoop, IdmFollowerBrakesForAnEgoThatCutsIn) {
   // The ego steers into the target lane right in front of the follower.
   Scenario s = open_road(Behavior::Idm);
-  s.follower = {-12.0, 9.0, 0.0};
-  s.target = {60.0, 9.0, 0.0};
+  s.follower() = {-12.0, 9.0, 0.0};
+  s.target() = {60.0, 9.0, 0.0};
   const Config config = testing::untimed_config();
   const ScriptedPlanner cut_in([](const Observation& o) {
     const double wanted = o.ego.y < 3.0 ? 0.2 : 0.0;
@@ -138,14 +138,14 @@ TEST(ClosedLoop, IdmFollowerBrakesForAnEgoThatCutsIn) {
   });
   const sim::Rollout r = sim::simulate(s, cut_in, config, {4.0});
   testing::expect_consistent(r, s);
-  const CarTrack& follower = r.trajectory.others.car(Car::Follower);
+  const CarTrack& follower = r.trajectory.others.car(car_of(Role::Follower));
   double hardest = 0.0;
   for (double a : follower.a) hardest = std::min(hardest, a);
   EXPECT_LT(hardest, -1.0);  // IDM brakes hard for a car cutting in 7 m ahead
   // With the ego staying in its lane, the follower never brakes.
   const ScriptedPlanner stay([](const Observation&) { return Decision{}; });
   const sim::Rollout alone = sim::simulate(s, stay, config, {4.0});
-  for (double a : alone.trajectory.others.car(Car::Follower).a) EXPECT_GE(a, -1e-9);
+  for (double a : alone.trajectory.others.car(car_of(Role::Follower)).a) EXPECT_GE(a, -1e-9);
 }
 
 TEST(ClosedLoop, AThrowingOrSlowPlannerIsRecordedAndTheFallbackActs) {

@@ -19,7 +19,7 @@ planner::Observation over_the_line(const Scenario& scene, double y) {
   o.scene = &scene;
   o.ego = scene.ego;
   o.ego.y = y;
-  o.cars = {scene.leader, scene.follower, scene.target};
+  o.cars = {scene.leader(), scene.follower(), scene.target()};
   return o;
 }
 
@@ -32,11 +32,11 @@ TEST(Fallback, KeepsItsLaneBeforeTheLineAndTheTargetLaneAfterItWhenThatIsClear) 
 
 TEST(Fallback, BacksOutOfACutInRightInFrontOfTheFollower) {
   Scenario scene = testing::open_road_scenario();
-  scene.follower = {-5.0, 11.0, 0.0};  // 0.6 m bumper to bumper, and faster
+  scene.follower() = {-5.0, 11.0, 0.0};  // 0.6 m bumper to bumper, and faster
   const double w = scene.lane_width;
   EXPECT_FALSE(planner::fallback_in_target_lane(over_the_line(scene, 0.6 * w)));
   // With the leader as close as the follower, turning back gains nothing.
-  scene.leader = {2.5, 2.0, 0.0};  // beside the ego, its safe distance broken further
+  scene.leader() = {2.5, 2.0, 0.0};  // beside the ego, its safe distance broken further
   EXPECT_TRUE(planner::fallback_in_target_lane(over_the_line(scene, 0.6 * w)));
 }
 
@@ -45,13 +45,13 @@ TEST(Fallback, TheLaneKeeperSteersTowardTheChosenLane) {
   const planner::LaneKeeper keeper(testing::untimed_config());
   const double w = scene.lane_width;
   EXPECT_GT(planner::fallback_control(keeper, over_the_line(scene, 0.6 * w)).omega, 0.0);
-  scene.follower = {-5.0, 11.0, 0.0};
+  scene.follower() = {-5.0, 11.0, 0.0};
   EXPECT_LT(planner::fallback_control(keeper, over_the_line(scene, 0.6 * w)).omega, 0.0);
 }
 
 TEST(Fallback, BrakesForTheCarAheadInTheLaneItIsLeaving) {
   Scenario scene = testing::open_road_scenario();
-  scene.follower = {9.0, 6.0, 0.0};  // ahead of the ego in the target lane, slower
+  scene.follower() = {9.0, 6.0, 0.0};  // ahead of the ego in the target lane, slower
   const double w = scene.lane_width;
   const planner::LaneKeeper keeper(testing::untimed_config());
   const auto o = over_the_line(scene, 0.9 * w);
@@ -75,7 +75,7 @@ struct BackOut {
 
 BackOut back_out(const Config& config, double seconds) {
   Scenario scene = testing::open_road_scenario();
-  scene.follower = {-5.0, 11.0, 0.0};
+  scene.follower() = {-5.0, 11.0, 0.0};
   const planner::LaneKeeper keeper(config);
   planner::Observation o = over_the_line(scene, scene.lane_width);
   constexpr double kDt = 0.1;
@@ -111,8 +111,8 @@ TEST(Fallback, BacksOutAtTheBackOutHeadingAndSettlesInItsLane) {
 Scenario pushed_from_behind() {
   Scenario scene = testing::open_road_scenario();
   scene.ego.y = scene.lane_width;
-  scene.follower = {-15.0 - scene.vehicle.length, 14.0, 0.0};
-  scene.target = {120.0, 14.0, 0.0};
+  scene.follower() = {-15.0 - scene.vehicle.length, 14.0, 0.0};
+  scene.target() = {120.0, 14.0, 0.0};
   return scene;
 }
 
@@ -134,7 +134,7 @@ double closest_gap_behind(const Scenario& scene, const Config& config, double se
     planner::clip_to_limits(u, o.ego, config.limits, kDt);
     o.ego = step_exact(o.ego, u, kDt);
     for (CarState& car : o.cars) car.x += car.v * kDt;
-    const CarState& behind = o.cars[static_cast<std::size_t>(Car::Follower)];
+    const CarState& behind = o.cars[car_of(Role::Follower)];
     closest = std::min(closest, o.ego.x - behind.x - scene.vehicle.length);
   }
   return closest;
@@ -159,7 +159,7 @@ TEST(LaneKeeper, KeepsUpWithAFasterCarClosingInFromBehind) {
 // contact, where a second's match would not.
 TEST(LaneKeeper, OutrunsACarRightBehindItBeforeContact) {
   Scenario scene = pushed_from_behind();
-  scene.follower = {-1.5 - scene.vehicle.length, scene.ego.v + 3.0, 0.0};
+  scene.follower() = {-1.5 - scene.vehicle.length, scene.ego.v + 3.0, 0.0};
   Config config = testing::untimed_config();
   EXPECT_GT(closest_gap_behind(scene, config, 5.0), 0.0);
   config.closed_loop.keeper_rear_horizon = 0.0;
@@ -168,7 +168,7 @@ TEST(LaneKeeper, OutrunsACarRightBehindItBeforeContact) {
 
 TEST(LaneKeeper, TheCarAheadStillLimitsItsSpeedWhenACarBehindPushes) {
   Scenario scene = pushed_from_behind();
-  scene.target = {12.0, 6.0, 0.0};  // a slower car close ahead in the target lane
+  scene.target() = {12.0, 6.0, 0.0};  // a slower car close ahead in the target lane
   const planner::LaneKeeper keeper(testing::untimed_config());
   const auto o = in_the_target_lane(scene);
   const EgoControl u = keeper.control(o.ego, scene.lane_width, planner::car_ahead(o, true),
@@ -181,7 +181,7 @@ TEST(LaneKeeper, IgnoresASlowerOrDistantCarBehind) {
   const planner::LaneKeeper keeper(config);
   for (const CarState behind : {CarState{-15.0, 7.0, 0.0}, CarState{-200.0, 14.0, 0.0}}) {
     Scenario scene = pushed_from_behind();
-    scene.follower = behind;
+    scene.follower() = behind;
     const auto o = in_the_target_lane(scene);
     const EgoControl ahead_only = keeper.control(o.ego, scene.lane_width, std::nullopt);
     const EgoControl with_behind =

@@ -158,7 +158,7 @@ TEST(MlpMiqp, ARefusalCheckCutShortByItsTimeLimitIsRepeatedAtOnce) {
     Observation o;
     o.scene = &s;
     o.ego = s.ego;
-    o.cars = {s.leader, s.follower, s.target};
+    o.cars = {s.leader(), s.follower(), s.target()};
     int checks = 0;
     for (o.step = 0; o.step < 4; ++o.step) {
       const planner::Decision d = session->act(o);
@@ -283,6 +283,14 @@ TEST(MlpMiqp, ATrainedModelDrivesTheLoopWithoutCollision) {
   EXPECT_EQ(oracle["planner"], "mlp-miqp-oracle");
   EXPECT_EQ(oracle["outcome"], "well_posed");
   EXPECT_FALSE(oracle["collision"].get<bool>());
+
+  // Twelve cars: the classifier and the network read the nearest gap's.
+  testing::write_text(dir.file("s.json"),
+                      scenario_to_json(testing::dense_scenario(10, -80.0, 16.0)).dump());
+  const auto dense = drive("mlp-miqp");
+  ASSERT_FALSE(dense.is_null());
+  EXPECT_EQ(dense["others"].size(), 12U);
+  EXPECT_FALSE(dense["collision"].get<bool>());
 }
 
 }  // namespace

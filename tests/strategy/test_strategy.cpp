@@ -190,12 +190,12 @@ TEST(Strategy, TheGapOpensWhenBothSafeDistancesHold) {
   EXPECT_EQ(learn::gap_open_time(testing::no_gap_scenario(), default_cap()), 10.0);
   // A target just ahead that pulls away: the gap opens once it is far enough.
   Scenario opening = open;
-  opening.target = {5.0, 12.0, 0.0};
+  opening.target() = {5.0, 12.0, 0.0};
   const double t = learn::gap_open_time(opening, default_cap());
   const SafetyMargins d = opening.centre_safe_distances();
   const double needed = d.target.standstill + d.target.time_headway * opening.ego.v;
   const auto ahead = [&opening](double at) {
-    return opening.target.x + opening.target.v * at - (opening.ego.x + opening.ego.v * at);
+    return opening.target().x + opening.target().v * at - (opening.ego.x + opening.ego.v * at);
   };
   ASSERT_GT(t, 0.0);
   EXPECT_GE(ahead(t), needed);
@@ -209,7 +209,7 @@ TEST(Strategy, TheGapOpensWhenBothSafeDistancesHold) {
 // up stops at the cap, so the gap ahead opens later than an uncapped target's.
 TEST(Strategy, TheGapFeatureHoldsTheTrafficSpeedCap) {
   Scenario opening = testing::open_road_scenario();
-  opening.target = {5.0, opening.ego.v, 2.0};
+  opening.target() = {5.0, opening.ego.v, 2.0};
   const double cap = opening.ego.v + 1.0;
   const double capped = learn::gap_open_time(opening, cap);
   const double free = learn::gap_open_time(opening, std::numeric_limits<double>::infinity());
@@ -218,7 +218,7 @@ TEST(Strategy, TheGapFeatureHoldsTheTrafficSpeedCap) {
   const SafetyMargins d = opening.centre_safe_distances();
   const double needed = d.target.standstill + d.target.time_headway * opening.ego.v;
   const auto ahead = [&opening, cap](double at) {
-    CarState target = opening.target;
+    CarState target = opening.target();
     advance_constant_accel(target, at, cap);
     return target.x - (opening.ego.x + opening.ego.v * at);
   };
@@ -240,7 +240,7 @@ TEST(Strategy, TheGapFeatureHoldsTheTrafficSpeedCap) {
 TEST(Strategy, AModelFromBeforeTheGapFeatureStillVotes) {
   Scenario near = testing::open_road_scenario();
   Scenario far = near;
-  far.target.x += 30.0;
+  far.target().x += 30.0;
   learn::StrategyRows rows;
   for (const Scenario& s : {near, near, far}) {
     rows.features.push_back(learn::strategy_features(s, default_cap()).head(17));
@@ -260,7 +260,7 @@ TEST(Strategy, AModelFromBeforeTheGapFeatureStillVotes) {
 TEST(Strategy, TheVoteRanksTheNearestScenesStrategiesFirst) {
   Scenario near = testing::open_road_scenario();
   Scenario far = near;
-  far.target.x += 30.0;
+  far.target().x += 30.0;
   const auto model = model_of({near, near, far}, {"000", "000", "222"});
   const auto ranked = model->predict(near, 5);
   ASSERT_EQ(ranked.size(), 2u);
@@ -439,7 +439,7 @@ TEST(Strategy, AVoteTheReachableStatesRuleOutTakesNoPlace) {
   // The nearest row votes for the target lane at once, the next for the
   // optimum's strategy; one candidate is solved.
   Scenario farther = s;
-  farther.target.x += 5.0;
+  farther.target().x += 5.0;
   const auto model = model_of({s, farther}, {"2", truth});
   ASSERT_EQ(model->predict(s, 2).front(), "2");
   config.strategy_qp.candidates = 1;

@@ -16,6 +16,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "../foundation/test_helpers.hpp"
 #include "lanechange/error.hpp"
 #include "lanechange/studies/authors.hpp"
 
@@ -117,7 +118,7 @@ TEST(AuthorsRecords, LoadsSyntheticRecordsAndSkipsBlankLines) {
   EXPECT_EQ(records[1].line, 3);
   EXPECT_TRUE(records[1].solution.states.empty());
   EXPECT_EQ(records[1].scenario.behavior, Behavior::Idm);
-  EXPECT_DOUBLE_EQ(records[1].scenario.follower.x, -13.27187);
+  EXPECT_DOUBLE_EQ(records[1].scenario.follower().x, -13.27187);
 }
 
 TEST(AuthorsRecords, BadLinesNameTheLineAndTheField) {
@@ -181,8 +182,9 @@ TEST(AuthorsRecords, TheirCostIsTheReadmeCost) {
   double worst = 0.0;
   for (const AuthorsRecord& r : all_records()) {
     if (!r.solved) continue;
-    const AuthorsTerms t = authors_objective_terms(r.solution, config, r.scenario.lane_width,
-                                                   r.predicted_others.car(Car::Target).x.back());
+    const AuthorsTerms t =
+        authors_objective_terms(r.solution, config, r.scenario.lane_width,
+                                r.predicted_others.car(car_of(Role::Target)).x.back());
     for (int i = 0; i < 4; ++i) {
       worst = std::max(worst, std::abs(t[i] - r.objective_terms[i]) / (1.0 + r.objective_terms[i]));
     }
@@ -210,10 +212,10 @@ TEST(AuthorsRecords, OurPredictionAlongTheirPathIsClose) {
     const int lead = config.expert.prediction_lead_steps;
     const auto mine = predict_traffic(r.scenario, config, r.scenario.steps + lead, 0.1, &ego);
     for (int k = 0; k <= r.scenario.steps; ++k) {
-      leader = std::max(leader, std::abs(mine.car(Car::Leader).x[k + lead] -
-                                         r.predicted_others.car(Car::Leader).x[k]));
-      target = std::max(target, std::abs(mine.car(Car::Target).x[k + lead] -
-                                         r.predicted_others.car(Car::Target).x[k]));
+      leader = std::max(leader, std::abs(mine.car(car_of(Role::Leader)).x[k + lead] -
+                                         r.predicted_others.car(car_of(Role::Leader)).x[k]));
+      target = std::max(target, std::abs(mine.car(car_of(Role::Target)).x[k + lead] -
+                                         r.predicted_others.car(car_of(Role::Target)).x[k]));
     }
   }
   RecordProperty("leader_max_dx", std::to_string(leader));
@@ -275,9 +277,11 @@ TEST(AuthorsRecords, TheirPredictionOnOurGrid) {
   const AuthorsRecord& r = all_records().front();
   const TrafficPrediction p = their_prediction_on_our_grid(r);
   ASSERT_EQ(p.nodes(), r.scenario.steps + 2);
-  EXPECT_DOUBLE_EQ(p.car(Car::Leader).x[0], r.scenario.leader.x);
-  EXPECT_DOUBLE_EQ(p.car(Car::Target).x[1], r.predicted_others.car(Car::Target).x[0]);
-  EXPECT_DOUBLE_EQ(p.car(Car::Follower).v.back(), r.predicted_others.car(Car::Follower).v.back());
+  EXPECT_DOUBLE_EQ(p.car(car_of(Role::Leader)).x[0], r.scenario.leader().x);
+  EXPECT_DOUBLE_EQ(p.car(car_of(Role::Target)).x[1],
+                   r.predicted_others.car(car_of(Role::Target)).x[0]);
+  EXPECT_DOUBLE_EQ(p.car(car_of(Role::Follower)).v.back(),
+                   r.predicted_others.car(car_of(Role::Follower)).v.back());
 }
 
 // Their Euler step moves each car with its NEW speed and lets the speed go
@@ -295,7 +299,7 @@ TEST(AuthorsRecords, PredictionMatchesTheirsExactly) {
     for (const expert::State& z : r.solution.states)
       ego.push_back({z[expert::kX], z[expert::kY], z[expert::kV]});
     const auto mine = predict_traffic(r.scenario, config, r.scenario.steps + lead, 0.1, &ego);
-    for (Car car : {Car::Leader, Car::Target}) {
+    for (CarIndex car : {car_of(Role::Leader), car_of(Role::Target)}) {
       for (int k = 0; k <= r.scenario.steps; ++k) {
         worst =
             std::max(worst, std::abs(mine.car(car).x[k + lead] - r.predicted_others.car(car).x[k]));

@@ -100,15 +100,16 @@ struct LaneChangeQp {
 /// its Eq. 1 distance at every node where the ego is in the target lane, so
 /// the plan stays exact even where the prediction lets cars pass each other.
 struct Gap {
-  std::vector<Car> behind;  ///< nearest last
-  std::vector<Car> ahead;   ///< nearest first
+  std::vector<CarIndex> behind;  ///< nearest last
+  std::vector<CarIndex> ahead;   ///< nearest first
   /// The cars that frame the gap (none where the gap is open that way).
-  [[nodiscard]] std::optional<Car> car_behind() const;
-  [[nodiscard]] std::optional<Car> car_ahead() const;
+  [[nodiscard]] std::optional<CarIndex> car_behind() const;
+  [[nodiscard]] std::optional<CarIndex> car_ahead() const;
   bool operator==(const Gap&) const = default;
 };
-/// Eq. 1's one gap: between the follower and the target.
-[[nodiscard]] Gap paper_gap();
+/// Eq. 1's one gap: between the scene's follower and target (open where the
+/// scene has no car in that role).
+[[nodiscard]] Gap paper_gap(const Scenario& scenario);
 /// The gaps config.expert.gap allows, from the back of the target lane:
 /// the paper's alone (fixed), or one per place between, ahead of and behind
 /// the target-lane cars as they stand at t = 0 (best).
@@ -122,8 +123,9 @@ struct GapAim {
 };
 [[nodiscard]] GapAim aim_into(const Scenario& scenario, const Config& config,
                               const TrafficPrediction& prediction, const Gap& gap, int node);
-/// "follower-target", "none-follower", ...: the framing cars, back first.
-[[nodiscard]] std::string describe(const Gap& gap);
+/// "follower-target", "none-follower", ...: the ids of the framing cars,
+/// back first.
+[[nodiscard]] std::string describe(const Scenario& scenario, const Gap& gap);
 
 /// Builds the round's problem around `point` (its speeds and headings are the
 /// linearization point) with the cars predicted in `prediction`, the target

@@ -4,7 +4,6 @@
 // planner remembers between steps (the last plan, the classifier's verdict).
 // Every step the session sees an observation, never the other cars' future,
 // and answers with a control and a status.
-#include <array>
 #include <memory>
 #include <optional>
 #include <string>
@@ -22,12 +21,11 @@ namespace lanechange::planner {
 struct Observation {
   const Scenario* scene = nullptr;  ///< the initial scene (t = 0)
   int step = 0;
-  double t = 0.0;                ///< s since the start
-  EgoState ego;                  ///< ego.a is the acceleration applied in the last step
-  std::array<CarState, 3> cars;  ///< leader, follower, target (Car order)
-  [[nodiscard]] const CarState& car(Car which) const {
-    return cars[static_cast<std::size_t>(which)];
-  }
+  double t = 0.0;              ///< s since the start
+  EgoState ego;                ///< ego.a is the acceleration applied in the last step
+  std::vector<CarState> cars;  ///< every car of the scene, in its order
+  [[nodiscard]] const CarState& car(CarIndex which) const { return cars[which]; }
+  [[nodiscard]] const CarState& car(Role role) const { return cars[scene->index_of(role)]; }
 };
 
 /// Who produced a step's control.
@@ -63,7 +61,7 @@ class ClosedLoopPlanner {
 
 /// A car of the lane keeper's lane, with its length for the bumper gap.
 struct LaneCar {
-  Car car = Car::Leader;
+  CarIndex car = 0;
   CarState state;
   double length = 0.0;
 };
@@ -96,13 +94,11 @@ class LaneKeeper {
   Config config_;
 };
 
-/// The car ahead of the ego in a lane: the leader in the ego lane, the
-/// target in the target lane (the follower once the ego is behind it).
+/// The nearest car ahead of the ego in a lane (the target lane, or the ego
+/// lane), none on a free road.
 [[nodiscard]] std::optional<LaneCar> car_ahead(const Observation& observation, bool target_lane);
 
-/// The nearest car behind the ego in the target lane (the follower, or the
-/// target once the ego has passed it); none in the ego lane, where the
-/// scenario has no car behind.
+/// The nearest car behind the ego in a lane, none where no car is.
 [[nodiscard]] std::optional<LaneCar> car_behind(const Observation& observation, bool target_lane);
 
 /// Whether the fallback keeps to the target lane: once the ego's centre is
