@@ -230,6 +230,9 @@ struct ClosedLoopSettings {
   /// checks; the price is an expert plan (2.7 ms median) per refused step. 0 is the paper's
   /// Algorithm 1: a refused scene is left to the fallback for good (docs/closed_loop.md).
   int refusal_check_period = 1;
+  /// m/s^2: a rollout that made another car brake harder than this is an
+  /// unsafe cut-in (MOBIL's b_safe), counted beside the at-fault collisions.
+  double unsafe_decel = 4.0;
 };
 
 /// The paper's MPC baseline (docs/baselines.md, "mpc"). Its horizon, dt,
@@ -352,6 +355,22 @@ struct StrategyQpSettings {
   bool first_feasible = false;
 };
 
+/// How the other cars treat the car ahead of them (docs/traffic.md).
+struct TrafficSettings {
+  /// A car of constant speed or acceleration follows the car ahead in its
+  /// lane (the ego included once its body is there) where its behavior would
+  /// bring it closer than Krauss's safe speed allows, as SUMO's default car
+  /// does; false: the paper's traffic, whose cars ignore everything and may
+  /// drive through each other.
+  bool followers_react = true;
+  double reaction_time = 1.0;  ///< s: Krauss's tau, SUMO's default
+  double follow_decel = 4.5;   ///< m/s^2: Krauss's b, the braking a follower plans with (SUMO's)
+  /// m/s^2: no car brakes harder, whatever its model asks (dry asphalt allows
+  /// about 8 to 9); where that is not enough, the collision happens and is
+  /// judged. None (JSON null): no limit, the paper's IDM.
+  std::optional<double> max_decel = 9.0;
+};
+
 struct Config {
   std::string preset = "paper";
   double lane_width = 3.75;  ///< m
@@ -363,6 +382,7 @@ struct Config {
   /// Never the ego's bound, and never applied to a car already faster.
   std::optional<double> traffic_max_speed = 60.0 / 3.6;
   TrafficIntegration traffic_integration = TrafficIntegration::Ballistic;
+  TrafficSettings traffic;
   SafetyMargins safety;
   ExpertSettings expert;
   LabelTolerances labels;
@@ -380,6 +400,9 @@ struct Config {
 
 /// Named presets: "paper" (the default) and "authors" (the public MATLAB code).
 [[nodiscard]] Config make_preset(std::string_view name);
+/// The paper's traffic: cars that ignore everything, IDM without a braking
+/// limit. The `authors` preset's, and the reproduction's (docs/traffic.md).
+[[nodiscard]] TrafficSettings paper_traffic();
 [[nodiscard]] std::vector<std::string> preset_names();
 
 void to_json(nlohmann::json& out, const Config& config);

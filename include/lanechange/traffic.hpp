@@ -33,35 +33,67 @@ void advance_constant_accel(CarState& car, double dt, double cap);
 /// lane centred at `lane_center`.
 [[nodiscard]] bool body_in_lane(double y, double ego_width, double lane_center, double lane_width);
 
+/// Krauss's safe speed (SUMO's default car): the fastest a car may drive
+/// `gap` metres (bumper to bumper) behind a leader at `leader_speed` and still
+/// stop behind it, braking at `decel` after `reaction_time`.
+[[nodiscard]] double krauss_safe_speed(double gap, double speed, double leader_speed,
+                                       double reaction_time, double decel);
+
+/// Whether any car of the scene reacts to the ego (IDM, or any car under
+/// traffic.followers_react): a prediction then depends on the ego's path.
+[[nodiscard]] bool traffic_reacts(const Scenario& scenario, const Config& config);
+
 class TrafficModel {
  public:
   TrafficModel(const Scenario& scenario, const Config& config);
 
   /// Advances every car by dt, each by its own behavior. An IDM car follows
   /// the nearest car ahead in its lane, the ego included once its body is in
-  /// that lane. A car's `a` is the acceleration applied during the step.
+  /// that lane; under traffic.followers_react the other cars do too where
+  /// their behavior would take them past Krauss's safe speed. No car brakes
+  /// harder than traffic.max_decel. A car's `a` is the acceleration applied
+  /// during the step.
   void step(double dt, const EgoFootprint& ego);
 
   [[nodiscard]] const CarState& car(CarIndex which) const { return cars_[which]; }
   [[nodiscard]] const std::vector<CarState>& cars() const { return cars_; }
   [[nodiscard]] std::size_t car_count() const { return cars_.size(); }
+  /// Whether the car's last step was set by the ego ahead of it (it followed
+  /// the ego): its braking then is the ego's doing.
+  [[nodiscard]] bool followed_ego(CarIndex which) const { return followed_ego_[which] != 0; }
   [[nodiscard]] double time() const { return time_; }
 
  private:
-  [[nodiscard]] double idm_accel_of(CarIndex which, const EgoFootprint& ego) const;
-  void advance_idm(CarState& car, double dt) const;
+  /// The nearest car ahead in a car's lane, the ego included: gap (bumper to
+  /// bumper, +infinity for none), its speed, and whether it is the ego.
+  struct Ahead {
+    double gap;
+    double speed;
+    bool is_ego;
+  };
+  [[nodiscard]] Ahead ahead_of(CarIndex which, const EgoFootprint& ego) const;
+  /// The acceleration of car `which` this step, from the state now.
+  [[nodiscard]] double acceleration_of(CarIndex which, const EgoFootprint& ego, double dt);
+  void advance_ballistic(CarState& car, double dt) const;
 
   double lane_width_;
   VehicleSize vehicle_;  ///< the ego's body
   IdmParameters idm_;
   double speed_cap_;  ///< +infinity without a cap
   TrafficIntegration integration_;
+  TrafficSettings settings_;
+  double max_decel_;  ///< +infinity without a limit
   // Per car, in the scene's order; sized once.
   std::vector<Behavior> behavior_;
   std::vector<double> lane_center_;
   std::vector<double> length_;
+  std::vector<double> behavior_accel_;  ///< a constant-acceleration car's own a
   std::vector<CarState> cars_;
-  std::vector<double> accel_;  ///< this step's IDM accelerations, before any car moves
+  std::vector<double> accel_;  ///< this step's accelerations, before any car moves
+  /// this step: 1 where a car followed (its acceleration set by) the car ahead,
+  /// not its behavior alone; 0 else
+  std::vector<char> follows_;
+  std::vector<char> followed_ego_;  ///< as follows_, for the ego ahead
   double time_ = 0.0;
 };
 

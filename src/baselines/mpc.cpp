@@ -175,7 +175,7 @@ MpcProblemData build_mpc_problem(const Scenario& scene, const Config& base, cons
   data.ego_offsets = circles.offsets;
   data.ego_radius = circles.radius;
   const auto path = footprint_of(guess);
-  const TrafficPrediction cars = scene.behavior == Behavior::Idm
+  const TrafficPrediction cars = traffic_reacts(scene, config)
                                      ? predict_traffic(scene, config, data.steps, data.dt, &path)
                                      : predict_traffic(scene, config, data.steps, data.dt);
   add_obstacles(data, scene, cars, config.mpc, guess);

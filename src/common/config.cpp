@@ -100,6 +100,11 @@ void Config::validate() const {
   require(idm.exponent > 0, "idm.exponent", "must be positive");
   require(!traffic_max_speed || *traffic_max_speed > 0, "traffic_max_speed",
           "must be positive, or null for no cap");
+  require(traffic.reaction_time > 0, "traffic.reaction_time", "must be positive");
+  require(traffic.follow_decel > 0, "traffic.follow_decel", "must be positive");
+  require(!traffic.max_decel || *traffic.max_decel > 0, "traffic.max_decel",
+          "must be positive, or null for no limit");
+  require(closed_loop.unsafe_decel > 0, "closed_loop.unsafe_decel", "must be positive");
   for (const auto* d : {&safety.leader, &safety.follower, &safety.target}) {
     require(d->standstill >= 0 && d->time_headway >= 0, "safety", "distances must not be negative");
   }
@@ -141,6 +146,13 @@ void Config::validate() const {
   require(strategy_qp.screen_keep >= 1, "strategy_qp.screen_keep", "must be at least 1");
 }
 
+TrafficSettings paper_traffic() {
+  TrafficSettings t;
+  t.followers_react = false;
+  t.max_decel = std::nullopt;
+  return t;
+}
+
 namespace {
 
 // The authors' public MATLAB code (NOTES.md and reference/README.md).
@@ -162,6 +174,7 @@ Config authors_preset() {
   c.expert.globalisation = Globalisation::Off;  // more than 10 rounds is a failure there
   c.expert.gap = GapChoice::Fixed;
   c.traffic_integration = TrafficIntegration::Euler;
+  c.traffic = paper_traffic();
   c.sampler.target_speed = {20.0 / 3.6, 40.0 / 3.6};
   return c;
 }

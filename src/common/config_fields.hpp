@@ -55,6 +55,15 @@ void visit_fields(V& v, S& s) requires std::same_as<std::remove_const_t<S>, Clos
   v("lookahead", s.lookahead);
   v("lookahead_tolerance", s.lookahead_tolerance);
   v("refusal_check_period", s.refusal_check_period);
+  v("unsafe_decel", s.unsafe_decel);
+}
+
+template <class V, class S>
+void visit_fields(V& v, S& s) requires std::same_as<std::remove_const_t<S>, TrafficSettings> {
+  v("followers_react", s.followers_react);
+  v("reaction_time", s.reaction_time);
+  v("follow_decel", s.follow_decel);
+  v("max_decel", s.max_decel);
 }
 
 inline constexpr std::array<detail::EnumName<Globalisation>, 2> enum_names(Globalisation) {
@@ -226,6 +235,7 @@ void visit_fields(V& v, S& s) requires std::same_as<std::remove_const_t<S>, Conf
   v("idm", s.idm);
   v("traffic_max_speed", s.traffic_max_speed);
   v("traffic_integration", s.traffic_integration);
+  v("traffic", s.traffic);
   v("safety", s.safety);
   v("expert", s.expert);
   v("labels", s.labels);

@@ -12,14 +12,10 @@ LaneChangeQp first_round_problem(const Scenario& scenario, const Config& base) {
   const int steps = scenario.steps;
   const double dt = scenario.horizon / steps;
   const int predicted = steps + config.expert.prediction_lead_steps;
-  TrafficPrediction prediction = predict_traffic(scenario, config, predicted, dt);
+  const TrafficPrediction prediction = predict_traffic(scenario, config, predicted, dt);
   const Iterate point = warm_start(scenario, config, prediction);
-  if (scenario.behavior == Behavior::Idm) {
-    std::vector<EgoFootprint> path;
-    for (const State& z : point.states) path.push_back({z[kX], z[kY], z[kV]});
-    prediction = predict_traffic(scenario, config, predicted, dt, &path);
-  }
-  return build_lane_change_qp(scenario, config, point, prediction);
+  return build_lane_change_qp(scenario, config, point,
+                              prediction_along(scenario, config, predicted, dt, point));
 }
 
 CrossCheckCase compare_with_reference(const LaneChangeSolution& f, const StoredReference& r,

@@ -101,13 +101,12 @@ void restrict_to_box(LaneChangeQp& qp, const Iterate& point, double radius) {
   }
 }
 
-// The cars as a round linearized about `point` sees them: those that react
-// to the ego (IDM) are predicted again along it, into `prediction`.
+// The cars as a round linearized about `point` sees them, into `prediction`:
+// again only where they react to the ego.
 void predict_along(const Scenario& scenario, const Config& config, int predicted_steps, double dt,
                    const Iterate& point, TrafficPrediction& prediction) {
-  if (scenario.behavior == Behavior::Idm) {
-    const auto ego_path = footprint_of(point);
-    prediction = predict_traffic(scenario, config, predicted_steps, dt, &ego_path);
+  if (traffic_reacts(scenario, config)) {
+    prediction = prediction_along(scenario, config, predicted_steps, dt, point);
   }
 }
 
@@ -475,6 +474,15 @@ std::string start_inside_safe_distance(const Scenario& s) {
 }
 
 }  // namespace
+
+TrafficPrediction prediction_along(const Scenario& scenario, const Config& config,
+                                   int predicted_steps, double dt, const Iterate& point) {
+  if (!traffic_reacts(scenario, config)) {
+    return predict_traffic(scenario, config, predicted_steps, dt);
+  }
+  const auto ego_path = footprint_of(point);
+  return predict_traffic(scenario, config, predicted_steps, dt, &ego_path);
+}
 
 ExpertResult ExpertPlanner::plan(const Scenario& scenario, const PlanLimits& limits,
                                  const PlanHints& hints) const {

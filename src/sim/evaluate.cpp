@@ -29,7 +29,7 @@ using nlohmann::json;
 
 namespace {
 
-constexpr std::string_view kEvaluationFormat = "lanechange.evaluation/3";
+constexpr std::string_view kEvaluationFormat = "lanechange.evaluation/4";
 constexpr const char* kManifest = "evaluation.json";
 
 // The scene files of a folder, in the order of their names, each loaded
@@ -154,14 +154,17 @@ std::string rollout_row(long long index, const Scenario& s, const std::string& p
   const RolloutMetrics& m = r.metrics;
   std::string row = std::to_string(index) + "," + std::string(to_string(s.behavior)) + "," +
                     planner + "," + std::string(to_string(r.outcome)) + "," +
-                    (r.trajectory.collision ? "1" : "0") + "," + (r.collision_at_fault ? "1" : "0");
+                    (r.trajectory.collision ? "1" : "0") + "," +
+                    (r.collision_at_fault ? "1" : "0") + "," + (m.unsafe_cut_in ? "1" : "0") + "," +
+                    (m.cars_collide ? "1" : "0");
   for (int v : {m.takeovers, m.fallbacks, m.overruns, m.failures, m.clipped}) {
     row += ',';
     row += std::to_string(v);
   }
   for (double v : {m.time_to_target_lane >= 0 ? m.time_to_target_lane : NAN, m.min_gap, m.min_ttc,
                    m.max_abs_accel, m.rms_jerk, m.max_abs_omega, m.median_step_ms, m.p99_step_ms,
-                   m.max_step_ms, m.first_takeover_t >= 0 ? m.first_takeover_t : NAN}) {
+                   m.max_step_ms, m.first_takeover_t >= 0 ? m.first_takeover_t : NAN,
+                   m.forced_decel, m.max_car_decel}) {
     row += ',';
     row += number(v);
   }
@@ -185,6 +188,8 @@ std::vector<std::string> rollout_columns() {
           "outcome",
           "collision",
           "collision_at_fault",
+          "unsafe_cut_in",
+          "cars_collide",
           "takeovers",
           "fallbacks",
           "overruns",
@@ -200,6 +205,8 @@ std::vector<std::string> rollout_columns() {
           "p99_step_ms",
           "max_step_ms",
           "first_takeover_t",
+          "forced_decel",
+          "max_car_decel",
           "target_lane_slot",
           "reason"};
 }

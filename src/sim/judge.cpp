@@ -73,6 +73,25 @@ void traffic_measures(const Trajectory& t, const Scenario& scene, RolloutMetrics
   }
 }
 
+// The other cars among themselves: the hardest braking, and whether two of
+// a lane ever overlapped (each car's own length).
+void car_measures(const Trajectory& t, RolloutMetrics& m) {
+  const auto n = t.others.car_count();
+  for (CarIndex c = 0; c < n; ++c) {
+    for (double a : t.others.car(c).a) m.max_car_decel = std::max(m.max_car_decel, -a);
+  }
+  for (int k = 0; k < t.nodes() && !m.cars_collide; ++k) {
+    const auto at = static_cast<std::size_t>(k);
+    for (CarIndex i = 0; i < n; ++i) {
+      for (CarIndex j = 0; j < i; ++j) {
+        if (t.cars[i].lane != t.cars[j].lane) continue;
+        const double reach = 0.5 * (t.cars[i].size.length + t.cars[j].size.length);
+        if (std::abs(t.others.car(i).x[at] - t.others.car(j).x[at]) < reach) m.cars_collide = true;
+      }
+    }
+  }
+}
+
 // Where a lane change ended against Eq. 1's gap (between the scene's
 // follower and target): in it, ahead of it or behind it.
 std::string target_lane_slot(const Trajectory& t, const Scenario& scene) {
@@ -102,7 +121,10 @@ RolloutMetrics measure(const Rollout& rollout, const Scenario& scene, const Conf
     }
   }
   traffic_measures(t, scene, m);
+  car_measures(t, m);
   m.target_lane_slot = target_lane_slot(t, scene);
+  m.forced_decel = rollout.forced_decel;
+  m.unsafe_cut_in = rollout.forced_decel > config.closed_loop.unsafe_decel;
   double jerk_sq = 0.0;
   const auto applied = static_cast<int>(rollout.steps.size());
   for (int k = 0; k < applied; ++k) {

@@ -57,7 +57,11 @@ json rollout_to_json(const Rollout& r) {
       {"fallbacks", m.fallbacks},
       {"clipped", m.clipped},
       {"overruns", m.overruns},
-      {"failures", m.failures}};
+      {"failures", m.failures},
+      {"forced_decel", m.forced_decel},
+      {"unsafe_cut_in", m.unsafe_cut_in},
+      {"max_car_decel", m.max_car_decel},
+      {"cars_collide", m.cars_collide}};
   return out;
 }
 

@@ -52,6 +52,7 @@ class Loop {
     // The last node repeats the control before it (formats.md).
     path_.controls.push_back(path_.controls.empty() ? EgoControl{} : path_.controls.back());
     out.trajectory = std::move(path_);
+    out.forced_decel = forced_decel_;
   }
 
  private:
@@ -117,6 +118,7 @@ class Loop {
       // until then it repeats the last one.
       if (!track.a.empty()) track.a.back() = car.a;
       track.a.push_back(car.a);
+      if (traffic_.followed_ego(c)) forced_decel_ = std::max(forced_decel_, -car.a);
     }
   }
 
@@ -148,6 +150,7 @@ class Loop {
   double peak_y_ = -std::numeric_limits<double>::infinity();
   Trajectory path_;
   Observation observation_;
+  double forced_decel_ = 0.0;
 };
 
 // Not at fault: run into from behind by a car of the lane the ego's body has

@@ -46,17 +46,20 @@ RolloutRow parse(const std::string& line) {
   r.outcome = f[3];
   r.collision = f[4] == "1";
   r.at_fault = f[5] == "1";
+  r.unsafe_cut_in = f[6] == "1";
+  r.cars_collide = f[7] == "1";
   r.target_lane_slot = f[before_reason - 1];
   if (!r.target_lane_slot.empty() && r.target_lane_slot != "follower_target_gap" &&
       r.target_lane_slot != "ahead_of_target" && r.target_lane_slot != "behind_follower") {
     throw std::invalid_argument("unknown target_lane_slot \"" + r.target_lane_slot + "\"");
   }
-  double* numbers[] = {&r.takeovers,   &r.fallbacks,     &r.overruns,
-                       &r.failures,    &r.clipped,       &r.time_to_target_lane,
-                       &r.min_gap,     &r.min_ttc,       &r.max_abs_accel,
-                       &r.rms_jerk,    &r.max_abs_omega, &r.median_step_ms,
-                       &r.p99_step_ms, &r.max_step_ms,   &r.first_takeover_t};
-  std::size_t column = 6;
+  double* numbers[] = {&r.takeovers,    &r.fallbacks,     &r.overruns,
+                       &r.failures,     &r.clipped,       &r.time_to_target_lane,
+                       &r.min_gap,      &r.min_ttc,       &r.max_abs_accel,
+                       &r.rms_jerk,     &r.max_abs_omega, &r.median_step_ms,
+                       &r.p99_step_ms,  &r.max_step_ms,   &r.first_takeover_t,
+                       &r.forced_decel, &r.max_car_decel};
+  std::size_t column = 8;
   for (double* value : numbers) *value = cell_number(f[column++]);
   r.reason = reason;
   return r;
@@ -94,6 +97,8 @@ std::string summary_row(const std::string& planner, const std::string& behavior,
                                      rates.aborted,
                                      rates.collision,
                                      rates.at_fault,
+                                     rates.unsafe_cut_in,
+                                     rates.cars_collide,
                                      rates.takeovers,
                                      rates.fallbacks,
                                      rates.overruns,
@@ -125,13 +130,16 @@ RolloutRates rates_of(std::span<const RolloutRow* const> rows) {
     out.aborted += r->outcome == "aborted" ? 1 : 0;
     out.collision += r->collision ? 1 : 0;
     out.at_fault += r->at_fault ? 1 : 0;
+    out.unsafe_cut_in += r->unsafe_cut_in ? 1 : 0;
+    out.cars_collide += r->cars_collide ? 1 : 0;
     out.takeovers += r->takeovers;
     out.fallbacks += r->fallbacks;
     out.overruns += r->overruns;
   }
   const auto n = static_cast<double>(rows.size());
-  for (double* share : {&out.success, &out.ill_posed, &out.failure, &out.aborted, &out.collision,
-                        &out.at_fault, &out.takeovers, &out.fallbacks, &out.overruns}) {
+  for (double* share :
+       {&out.success, &out.ill_posed, &out.failure, &out.aborted, &out.collision, &out.at_fault,
+        &out.unsafe_cut_in, &out.cars_collide, &out.takeovers, &out.fallbacks, &out.overruns}) {
     *share /= n;
   }
   return out;
@@ -169,6 +177,8 @@ std::vector<std::string> summary_columns() {
           "aborted_rate",
           "collision_rate",
           "at_fault_collision_rate",
+          "unsafe_cut_in_rate",
+          "cars_collide_rate",
           "takeovers_per_rollout",
           "fallback_steps_per_rollout",
           "overruns_per_rollout",

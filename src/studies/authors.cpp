@@ -266,20 +266,10 @@ std::string_view to_string(AuthorsCause c) {
 
 namespace {
 
-std::vector<EgoFootprint> footprint_of(const Iterate& path) {
-  std::vector<EgoFootprint> out;
-  out.reserve(path.states.size());
-  for (const State& z : path.states) out.push_back({z[kX], z[kY], z[kV]});
-  return out;
-}
-
 // The cars as a round linearized about `point` sees them (planner.cpp).
 TrafficPrediction prediction_along(const Scenario& s, const Config& config, const Iterate& point) {
-  const int predicted_steps = s.steps + config.expert.prediction_lead_steps;
-  const double dt = s.horizon / s.steps;
-  if (s.behavior != Behavior::Idm) return predict_traffic(s, config, predicted_steps, dt);
-  const auto ego = footprint_of(point);
-  return predict_traffic(s, config, predicted_steps, dt, &ego);
+  return expert::prediction_along(s, config, s.steps + config.expert.prediction_lead_steps,
+                                  s.horizon / s.steps, point);
 }
 
 int first_cross_node(const Iterate& path, const Scenario& s) {

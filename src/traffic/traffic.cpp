@@ -43,17 +43,34 @@ bool body_in_lane(double y, double ego_width, double lane_center, double lane_wi
   return std::abs(y - lane_center) < 0.5 * (lane_width + ego_width);
 }
 
+double krauss_safe_speed(double gap, double speed, double leader_speed, double reaction_time,
+                         double decel) {
+  return leader_speed + (gap - leader_speed * reaction_time) /
+                            ((leader_speed + speed) / (2.0 * decel) + reaction_time);
+}
+
+bool traffic_reacts(const Scenario& scenario, const Config& config) {
+  if (config.traffic.followers_react && scenario.car_count() > 0) return true;
+  return std::any_of(scenario.cars.begin(), scenario.cars.end(),
+                     [](const OtherCar& car) { return car.behavior == Behavior::Idm; });
+}
+
 TrafficModel::TrafficModel(const Scenario& scenario, const Config& config)
     : lane_width_(scenario.lane_width),
       vehicle_(scenario.vehicle),
       idm_(scenario.idm),
       speed_cap_(config.traffic_max_speed.value_or(std::numeric_limits<double>::infinity())),
       integration_(config.traffic_integration),
-      accel_(scenario.car_count(), 0.0) {
+      settings_(config.traffic),
+      max_decel_(config.traffic.max_decel.value_or(std::numeric_limits<double>::infinity())),
+      accel_(scenario.car_count(), 0.0),
+      follows_(scenario.car_count(), 0),
+      followed_ego_(scenario.car_count(), 0) {
   const std::size_t n = scenario.car_count();
   behavior_.reserve(n);
   lane_center_.reserve(n);
   length_.reserve(n);
+  behavior_accel_.reserve(n);
   cars_.reserve(n);
   for (CarIndex i = 0; i < n; ++i) {
     behavior_.push_back(scenario.cars[i].behavior);
@@ -61,34 +78,54 @@ TrafficModel::TrafficModel(const Scenario& scenario, const Config& config)
     length_.push_back(scenario.size_of(i).length);
     cars_.push_back(scenario.car(i));
     if (behavior_.back() == Behavior::ConstantSpeed) cars_.back().a = 0.0;
+    behavior_accel_.push_back(cars_.back().a);
   }
 }
 
-double TrafficModel::idm_accel_of(CarIndex which, const EgoFootprint& ego) const {
+TrafficModel::Ahead TrafficModel::ahead_of(CarIndex which, const EgoFootprint& ego) const {
   const CarState& me = cars_[which];
   const double my_lane = lane_center_[which];
-  double gap = std::numeric_limits<double>::infinity();
-  double leader_speed = me.v;
-  auto consider = [&](double x, double v, double length) {
+  Ahead out{std::numeric_limits<double>::infinity(), me.v, false};
+  auto consider = [&](double x, double v, double length, bool is_ego) {
     const double g = x - me.x - 0.5 * (length_[which] + length);
-    if (x > me.x && g < gap) {
-      gap = g;
-      leader_speed = v;
-    }
+    if (x > me.x && g < out.gap) out = {g, v, is_ego};
   };
   for (CarIndex other = 0; other < cars_.size(); ++other) {
     if (other != which && lane_center_[other] == my_lane) {
-      consider(cars_[other].x, cars_[other].v, length_[other]);
+      consider(cars_[other].x, cars_[other].v, length_[other], false);
     }
   }
   if (body_in_lane(ego.y, vehicle_.width, my_lane, lane_width_)) {
-    consider(ego.x, ego.v, vehicle_.length);
+    consider(ego.x, ego.v, vehicle_.length, true);
   }
-  return idm_acceleration(idm_, me.v, gap, leader_speed);
+  return out;
+}
+
+double TrafficModel::acceleration_of(CarIndex which, const EgoFootprint& ego, double dt) {
+  follows_[which] = 0;
+  followed_ego_[which] = 0;
+  const CarState& me = cars_[which];
+  const Ahead ahead = ahead_of(which, ego);
+  const bool has_ahead = std::isfinite(ahead.gap);
+  if (behavior_[which] == Behavior::Idm) {
+    followed_ego_[which] = has_ahead && ahead.is_ego ? 1 : 0;
+    return std::max(idm_acceleration(idm_, me.v, ahead.gap, ahead.speed), -max_decel_);
+  }
+  if (!settings_.followers_react || !has_ahead) return behavior_accel_[which];
+  // Where its behavior stays within Krauss's safe speed, a car keeps it.
+  CarState by_behavior = me;
+  by_behavior.a = behavior_accel_[which];
+  advance_constant_accel(by_behavior, dt, speed_cap_);
+  const double safe = krauss_safe_speed(ahead.gap, me.v, ahead.speed, settings_.reaction_time,
+                                        settings_.follow_decel);
+  if (safe >= by_behavior.v) return behavior_accel_[which];
+  follows_[which] = 1;
+  followed_ego_[which] = ahead.is_ego ? 1 : 0;
+  return std::max((std::max(safe, 0.0) - me.v) / dt, -max_decel_);
 }
 
 // Ballistic update with a stop instead of reversing (Treiber and Kesting).
-void TrafficModel::advance_idm(CarState& c, double dt) const {
+void TrafficModel::advance_ballistic(CarState& c, double dt) const {
   if (integration_ == TrafficIntegration::Euler) {
     c.v = std::max(0.0, c.v + c.a * dt);
     c.x += c.v * dt;
@@ -102,14 +139,12 @@ void TrafficModel::advance_idm(CarState& c, double dt) const {
 }
 
 void TrafficModel::step(double dt, const EgoFootprint& ego) {
-  // Every IDM car reacts to the others where they are now, before any moves.
+  // Every car reacts to the others where they are now, before any moves.
+  for (CarIndex i = 0; i < cars_.size(); ++i) accel_[i] = acceleration_of(i, ego, dt);
   for (CarIndex i = 0; i < cars_.size(); ++i) {
-    if (behavior_[i] == Behavior::Idm) accel_[i] = idm_accel_of(i, ego);
-  }
-  for (CarIndex i = 0; i < cars_.size(); ++i) {
-    if (behavior_[i] == Behavior::Idm) {
-      cars_[i].a = accel_[i];
-      advance_idm(cars_[i], dt);
+    cars_[i].a = accel_[i];
+    if (behavior_[i] == Behavior::Idm || follows_[i] != 0) {
+      advance_ballistic(cars_[i], dt);
     } else {
       advance_constant_accel(cars_[i], dt, speed_cap_);
     }

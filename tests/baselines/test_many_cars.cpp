@@ -14,7 +14,8 @@ namespace {
 class ManyCars : public ::testing::TestWithParam<const char*> {};
 
 // Ten cars in the target lane, 16 m apart and as fast as the ego, a leader
-// and a car behind in the ego lane: the gaps are short but open.
+// and a car behind in the ego lane: every gap is shorter than the 26 m the
+// ego needs, so the rollouts test the loop and the traffic, not the change.
 TEST_P(ManyCars, RollsOutATwelveCarSceneConsistently) {
   const Config config = testing::untimed_config();
   for (const Behavior behavior : {Behavior::ConstantSpeed, Behavior::Idm}) {
@@ -38,10 +39,10 @@ INSTANTIATE_TEST_SUITE_P(EveryPlanner, ManyCars,
 // is open it drops back to it, and the plan it took names its cars.
 TEST(ManyCars, TheExpertChangesLanesIntoTheOnlyOpenGapOfADenseLane) {
   const Config config = testing::untimed_config();
-  // Eight cars bumper to bumper but one gap of 30 m between t2 and t3.
-  nlohmann::json j = scenario_to_json(testing::dense_scenario(8, -40.0, 8.0));
-  for (std::size_t i = 5; i < j["cars"].size(); ++i)
-    j["cars"][i]["x"] = j["cars"][i]["x"].get<double>() + 30.0;
+  // Eight cars 16 m apart (Krauss's safe gap at 9 m/s), t0 to t2 30 m further back.
+  nlohmann::json j = scenario_to_json(testing::dense_scenario(8, -56.0, 16.0));
+  for (std::size_t i = 2; i < 5; ++i) j["cars"][i]["x"] = j["cars"][i]["x"].get<double>() - 30.0;
+  j["cars"][1]["x"] = -45.0;  // the car behind leaves the ego room to drop back
   const Scenario s = scenario_from_json(j, config);
   const auto planner = baselines::make_planner("miqp", config);
   const sim::Rollout r = sim::simulate(s, *planner, config);

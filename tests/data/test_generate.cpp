@@ -112,12 +112,13 @@ TEST(Generate, SolvedScenariosGiveNPlusOneSamplesFromTheirInitialScene) {
 }
 
 // The traffic columns at node k are the cars as the plan saw them: at k = 0
-// the initial scene; for constant speed, x0 + v0 t. The lane mode says where
+// the initial scene; for constant speed in the paper's traffic, x0 + v0 t. The lane mode says where
 // the body is (footprint rule): wholly in the ego lane (0) or the target lane (2).
 TEST(Generate, SamplesCarryTheTrafficAndTheLaneModePerNode) {
   TempDir dir;
   auto o = small_options(dir.path(), 8);
   o.behavior = Behavior::ConstantSpeed;
+  o.config.traffic = paper_traffic();
   run(o, 1);
   const auto samples = testing::read_all(dir.path(), "samples");
   ASSERT_FALSE(samples.rows.empty());

@@ -695,7 +695,7 @@ TEST(Planner, TakesTheOnlyOpenGapAheadOfTheTarget) {
   Scenario s = open_road_scenario();
   s.ego.v = 10.0;
   s.leader() = {40.0, 10.0, 0.0};
-  s.follower() = {-20.0, 8.0, 0.0};
+  s.follower() = {-24.0, 8.0, 0.0};  // at Krauss's safe gap: neither brakes
   s.target() = {-10.0, 8.0, 0.0};
   validate_scenario(s);
   expect_only_the_gap(s, {{car_of(Role::Follower), car_of(Role::Target)}, {}});
@@ -707,8 +707,8 @@ TEST(Planner, TakesTheOnlyOpenGapBehindTheFollower) {
   Scenario s = open_road_scenario();
   s.ego.v = 10.0;
   s.leader() = {50.0, 10.0, 0.0};
-  s.follower() = {5.0, 14.0, 0.0};
-  s.target() = {15.0, 14.0, 0.0};
+  s.follower() = {5.0, 14.0, 0.0};  // at Krauss's safe gap: neither brakes
+  s.target() = {25.0, 14.0, 0.0};
   validate_scenario(s);
   expect_only_the_gap(s, {{}, {car_of(Role::Follower), car_of(Role::Target)}});
 }
@@ -809,7 +809,7 @@ Scenario cycling_scenario() {
 }
 
 TEST(Planner, StopsRoundsThatAlternateBetweenTwoPaths) {
-  Config config = fixed_gap_config();            // the gap and
+  Config config = testing::paper_config();       // the gap, traffic and
   config.expert.lane_rule = LaneRule::EitherOr;  // the rule it was found under
   config.expert.globalisation = Globalisation::Off;
   config.expert.cycle_tolerance = 0.0;
@@ -830,9 +830,9 @@ TEST(Planner, StopsRoundsThatAlternateBetweenTwoPaths) {
   EXPECT_EQ(planner.to_trajectory(early, cycling_scenario()).label, Label::Failure);
 }
 
-// The cycling scenes were found through Eq. 1's gap.
+// The cycling scenes were found through Eq. 1's gap, in the paper's traffic.
 Config config_with(LaneRule rule, Globalisation globalisation) {
-  Config config = fixed_gap_config();
+  Config config = testing::paper_config();
   config.expert.lane_rule = rule;
   config.expert.globalisation = globalisation;
   return config;
@@ -974,21 +974,23 @@ TEST(Planner, AFormat1FileAndItsFormat2TranslationPlanAlike) {
 // Eight cars in the target lane, one open gap among them: the exact plan
 // goes through it, and names the cars around it.
 TEST(Planner, FindsTheOneOpenGapAmongEightCars) {
-  nlohmann::json j = scenario_to_json(testing::dense_scenario(8, -40.0, 8.0));
-  for (std::size_t i = 5; i < j["cars"].size(); ++i) {
-    j["cars"][i]["x"] = j["cars"][i]["x"].get<double>() + 30.0;
-  }
+  // 16 m apart (Krauss's safe gap at 9 m/s) but t0 to t2 30 m further back.
+  nlohmann::json j = scenario_to_json(testing::dense_scenario(8, -56.0, 16.0));
+  for (std::size_t i = 2; i < 5; ++i) j["cars"][i]["x"] = j["cars"][i]["x"].get<double>() - 30.0;
+  j["cars"][1]["x"] = -45.0;  // the car behind leaves the ego room to drop back
   const Scenario s = scenario_from_json(j, Config{});
   const ExpertPlanner planner(Config{}, std::make_shared<FastLaneChangeSolver>());
   const ExpertResult r = planner.plan(s);
   ASSERT_EQ(r.status, PlanStatus::Converged) << r.reason;
   EXPECT_EQ(describe(s, r.gap), "t2-t3");
   const Trajectory t = planner.to_trajectory(r, s);
-  EXPECT_EQ(t.label, Label::WellPosed) << t.reason;
+  // Open loop, dropping back 20 m and turning in within 5 s ends steep
+  // (ill-posed); the closed loop finishes it (ManyCars, tests/baselines).
+  EXPECT_NE(t.label, Label::Failure) << t.reason;
   EXPECT_FALSE(t.collision);
   EXPECT_EQ(t.details.at("gap").at("behind"), "t2");
   expect_audit_passes(t, s, Config{});
-  // The paper's gap (the nearest cars, t4 and t5 here) is closed.
+  // The paper's gap (the nearest cars, t3 and t4 here) is closed.
   const ExpertPlanner fixed(fixed_gap_config(), std::make_shared<FastLaneChangeSolver>());
   EXPECT_NE(fixed.plan(s).status, PlanStatus::Converged);
 }

@@ -200,6 +200,14 @@ inline Config fixed_gap_config(Config config = {}) {
   return config;
 }
 
+/// The paper's whole set-up: Eq. 1's gap alone, in the paper's traffic
+/// (cars that ignore everything, IDM without a braking limit).
+inline Config paper_config(Config config = {}) {
+  config = fixed_gap_config(config);
+  config.traffic = paper_traffic();
+  return config;
+}
+
 inline Scenario open_road_scenario(Behavior behavior = Behavior::ConstantSpeed) {
   Scenario s = three_car_scenario(Config{});
   s.set_behavior(behavior);

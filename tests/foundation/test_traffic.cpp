@@ -120,7 +120,8 @@ TEST(ConstantAccel, ClampsAtTheSpeedLimit) {
 TEST(ConstantSpeed, AFastCarKeepsItsSpeedWhateverTheCap) {
   Scenario s = two_lane_scene(Behavior::ConstantSpeed);
   s.follower().v = 16.73;  // above the default cap of 60 km/h
-  const Config config;
+  Config config;
+  config.traffic = paper_traffic();  // it would catch up with the target and follow it
   ASSERT_TRUE(config.traffic_max_speed.has_value());
   ASSERT_GT(s.follower().v, *config.traffic_max_speed);
   const TrafficPrediction p = predict_traffic(s, config, 50, 0.1);
@@ -162,6 +163,82 @@ TEST(ConstantSpeed, IgnoresAccelerationFields) {
   const TrafficPrediction p = predict_traffic(s, Config{}, 10, 0.1);
   EXPECT_NEAR(p.car(car_of(Role::Target)).x.back(), s.target().x + s.target().v * 1.0, 1e-9);
   EXPECT_DOUBLE_EQ(p.car(car_of(Role::Target)).v.back(), s.target().v);
+}
+
+// A fast constant-speed car 20 m behind a slow one: the paper's traffic
+// drives it through; with followers reacting it follows at a gap, and the
+// prediction keeps the same model.
+TEST(Followers, ACarNeverDrivesThroughTheCarAheadOfIt) {
+  Scenario s = two_lane_scene(Behavior::ConstantSpeed);
+  s.follower() = {0.0, 16.0, 0.0};
+  s.target() = {20.0, 8.0, 0.0};
+  s.ego.x = -40.0;
+  const double reach = s.vehicle.length;  // both cars have the default body
+  auto least_gap = [&](const Config& config) {
+    const TrafficPrediction p = predict_traffic(s, config, 150, 0.1);
+    double least = 1e9;
+    const CarTrack& f = p.car(car_of(Role::Follower));
+    const CarTrack& t = p.car(car_of(Role::Target));
+    for (std::size_t k = 0; k < f.x.size(); ++k) least = std::min(least, t.x[k] - f.x[k] - reach);
+    return std::pair{least, f.v.back()};
+  };
+  const auto [reacting_gap, reacting_speed] = least_gap(Config{});
+  EXPECT_GT(reacting_gap, 1.0);
+  EXPECT_NEAR(reacting_speed, 8.0, 0.5);  // it follows the target
+  Config paper;
+  paper.traffic = paper_traffic();
+  EXPECT_LT(least_gap(paper).first, -20.0);  // the ghost
+}
+
+// An ego settled in a lane ahead of a faster constant-speed car: the car
+// brakes for it (the ego set its step), and never runs into it.
+TEST(Followers, AConstantSpeedCarBrakesForTheEgoAheadInItsLane) {
+  Scenario s = two_lane_scene(Behavior::ConstantSpeed);
+  s.follower() = {-30.0, 12.0, 0.0};
+  s.target() = {80.0, 12.0, 0.0};
+  s.ego = {0.0, s.lane_width, 8.0, 0.0, 0.0};
+  TrafficModel traffic(s, Config{});
+  bool braked_for_the_ego = false;
+  for (int k = 0; k < 100; ++k) {
+    const double ego_x = 8.0 * 0.1 * k;
+    traffic.step(0.1, {ego_x, s.lane_width, 8.0});
+    const CarState& f = traffic.car(car_of(Role::Follower));
+    ASSERT_LT(f.x + s.vehicle.length, ego_x + 0.8) << k;  // behind the ego after its step
+    braked_for_the_ego =
+        braked_for_the_ego || (f.a < 0.0 && traffic.followed_ego(car_of(Role::Follower)));
+  }
+  EXPECT_TRUE(braked_for_the_ego);
+  EXPECT_FALSE(traffic.followed_ego(car_of(Role::Target)));
+}
+
+// IDM asks for any braking a cut-in 2 m ahead calls for; the car brakes at
+// most traffic.max_decel.
+TEST(Followers, NoCarBrakesHarderThanItsPhysicalLimit) {
+  Scenario s = two_lane_scene(Behavior::Idm);
+  s.follower() = {-6.4, 11.3, 0.0};
+  s.target() = {80.0, 11.3, 0.0};
+  s.ego = {0.0, s.lane_width, 5.0, 0.0, 0.0};  // 2 m ahead of the follower's bumper
+  const Config config;
+  ASSERT_TRUE(config.traffic.max_decel.has_value());
+  TrafficModel limited(s, config);
+  limited.step(0.1, {s.ego.x, s.ego.y, s.ego.v});
+  EXPECT_DOUBLE_EQ(limited.car(car_of(Role::Follower)).a, -*config.traffic.max_decel);
+  EXPECT_TRUE(limited.followed_ego(car_of(Role::Follower)));
+  Config unlimited;
+  unlimited.traffic = paper_traffic();
+  TrafficModel paper(s, unlimited);
+  paper.step(0.1, {s.ego.x, s.ego.y, s.ego.v});
+  EXPECT_LT(paper.car(car_of(Role::Follower)).a, -30.0);
+}
+
+TEST(Followers, KraussSafeSpeedStopsBehindAStoppedCar) {
+  // At the gap a car needs to stop from v at b after tau, its safe speed is v.
+  const double v = 10.0, tau = 1.0, b = 4.5;
+  const double gap = v * tau + v * v / (2.0 * b);
+  EXPECT_NEAR(krauss_safe_speed(gap, v, 0.0, tau, b), v, 1e-9);
+  EXPECT_LT(krauss_safe_speed(gap - 1.0, v, 0.0, tau, b), v);
+  // Behind a car at its own speed, the safe gap is v tau.
+  EXPECT_NEAR(krauss_safe_speed(v * tau, v, v, tau, b), v, 1e-9);
 }
 
 }  // namespace

@@ -142,10 +142,17 @@ TEST(ClosedLoop, IdmFollowerBrakesForAnEgoThatCutsIn) {
   double hardest = 0.0;
   for (double a : follower.a) hardest = std::min(hardest, a);
   EXPECT_LT(hardest, -1.0);  // IDM brakes hard for a car cutting in 7 m ahead
+  // The judge counts that braking as the ego's doing.
+  EXPECT_NEAR(r.metrics.forced_decel, -hardest, 1e-9);
+  EXPECT_EQ(r.metrics.unsafe_cut_in, -hardest > config.closed_loop.unsafe_decel);
+  EXPECT_GE(r.metrics.max_car_decel, -hardest);
+  EXPECT_FALSE(r.metrics.cars_collide);
   // With the ego staying in its lane, the follower never brakes.
   const ScriptedPlanner stay([](const Observation&) { return Decision{}; });
   const sim::Rollout alone = sim::simulate(s, stay, config, {4.0});
   for (double a : alone.trajectory.others.car(car_of(Role::Follower)).a) EXPECT_GE(a, -1e-9);
+  EXPECT_DOUBLE_EQ(alone.metrics.forced_decel, 0.0);
+  EXPECT_FALSE(alone.metrics.unsafe_cut_in);
 }
 
 TEST(ClosedLoop, AThrowingOrSlowPlannerIsRecordedAndTheFallbackActs) {

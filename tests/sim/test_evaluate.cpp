@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -27,9 +28,16 @@ std::string without_times(const std::string& row) {
   std::vector<std::string> cells;
   std::stringstream in(row);
   for (std::string c; std::getline(in, c, ',');) cells.push_back(c);
+  const auto columns = sim::rollout_columns();
+  const auto at = [&columns](const char* name) {
+    return static_cast<std::size_t>(std::find(columns.begin(), columns.end(), name) -
+                                    columns.begin());
+  };
+  const std::size_t first = at("median_step_ms");
+  const std::size_t last = at("max_step_ms");
   std::string out;
   for (std::size_t i = 0; i < cells.size(); ++i) {
-    if (i >= 17 && i <= 19) continue;  // median_step_ms, p99_step_ms, max_step_ms
+    if (i >= first && i <= last) continue;  // the step times
     out += cells[i] + "|";
   }
   return out;

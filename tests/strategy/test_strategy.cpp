@@ -94,7 +94,7 @@ TEST(Strategy, LaneModeIndicesFollowTheFormulation) {
 // The round's QP of an exact plan, solved with the plan's own modes fixed,
 // has the exact optimum: the integer part is all the search adds.
 TEST(Strategy, AStrategyFromAnExactPlanGivesBackItsCost) {
-  const Config config = testing::fixed_gap_config();  // strategies are Eq. 1's gap's
+  const Config config = testing::paper_config();  // strategies are Eq. 1's gap's
   const ScenarioSampler sampler(config, 5);
   const expert::FixedModeLaneChangeSolver fixed;
   int compared = 0;

@@ -87,6 +87,13 @@ struct PlanHints {
   const Gap* gap = nullptr;
 };
 
+/// The cars as a round linearized about `point` sees them: predicted along
+/// the point's path where they react to the ego (traffic_reacts), else
+/// without it. `predicted_steps` steps of `dt`.
+[[nodiscard]] TrafficPrediction prediction_along(const Scenario& scenario, const Config& config,
+                                                 int predicted_steps, double dt,
+                                                 const Iterate& point);
+
 /// The initial guess (config.expert.warm_start) for a scenario, aimed into
 /// `gap` (the quintic ends behind its car ahead, at that car's speed).
 [[nodiscard]] Iterate warm_start(const Scenario& scenario, const Config& config,

@@ -65,11 +65,14 @@ struct RolloutRow {
   std::string behavior, planner, outcome, reason;
   bool collision = false;
   bool at_fault = false;
+  bool unsafe_cut_in = false;  ///< RolloutMetrics::unsafe_cut_in
+  bool cars_collide = false;   ///< RolloutMetrics::cars_collide
   double takeovers = 0, fallbacks = 0, overruns = 0, failures = 0, clipped = 0;
   double time_to_target_lane = 0, min_gap = 0, min_ttc = 0, max_abs_accel = 0, rms_jerk = 0;
   double max_abs_omega = 0, median_step_ms = 0, p99_step_ms = 0, max_step_ms = 0;
-  double first_takeover_t = 0;   ///< s; NaN: none
-  std::string target_lane_slot;  ///< RolloutMetrics::target_lane_slot
+  double first_takeover_t = 0;                 ///< s; NaN: none
+  double forced_decel = 0, max_car_decel = 0;  ///< m/s^2
+  std::string target_lane_slot;                ///< RolloutMetrics::target_lane_slot
   [[nodiscard]] bool success() const { return outcome == "well_posed" && !collision; }
 };
 
@@ -79,6 +82,7 @@ struct RolloutRates {
   long long rollouts = 0;
   double success = 0, ill_posed = 0, failure = 0, aborted = 0;  ///< shares (success: no collision)
   double collision = 0, at_fault = 0;                           ///< shares
+  double unsafe_cut_in = 0, cars_collide = 0;                   ///< shares
   double takeovers = 0, fallbacks = 0, overruns = 0;            ///< per rollout
 };
 /// All zero for no rows.

@@ -59,10 +59,16 @@ struct RolloutMetrics {
   int clipped = 0;
   int overruns = 0;
   int failures = 0;  ///< steps where the planner threw
-  /// Where the ego ends among the target lane's cars, if its centre ends in
-  /// that lane: "follower_target_gap" (the only gap Eq. 1 lets the expert
-  /// take), "ahead_of_target" or "behind_follower"; empty otherwise.
+  /// Where the ego ends against Eq. 1's gap, if its centre ends in the
+  /// target lane: "follower_target_gap" (between the scene's follower and
+  /// target), "ahead_of_target" or "behind_follower"; empty otherwise.
   std::string target_lane_slot;
+  /// m/s^2: the hardest braking the ego forced on a car following it (0:
+  /// none), and whether that exceeded closed_loop.unsafe_decel.
+  double forced_decel = 0.0;
+  bool unsafe_cut_in = false;
+  double max_car_decel = 0.0;  ///< m/s^2: the hardest braking of any other car
+  bool cars_collide = false;   ///< two other cars overlapped at some node
 };
 
 struct Rollout {
@@ -76,6 +82,8 @@ struct Rollout {
   /// a car of the lane its body has been wholly in for at least 1 s (a
   /// constant-speed or constant-acceleration car does not react to the ego).
   bool collision_at_fault = false;
+  /// m/s^2: the hardest braking of a car whose step the ego ahead of it set.
+  double forced_decel = 0.0;
 };
 
 /// Runs one rollout of `planner` from `scene` (its fields override `config`).
