@@ -176,6 +176,11 @@ struct SamplerSettings {
   Interval follower_offset{-40.0, 10.0};  ///< m: follower centre relative to the ego
   Interval gap_length{1.0, 50.0};         ///< m: free space between follower and target bumpers
   Interval accel{-1.0, 1.0};              ///< m/s^2, for constant_accel
+  /// How many cars the target lane holds, drawn uniformly from this range of
+  /// whole numbers; [0, 0] draws the paper's scene (a follower and a target).
+  /// Dense traffic also puts a car behind the ego in its lane (docs/scenarios.md).
+  Interval target_lane_cars{0.0, 0.0};
+  Interval rear_headway{1.0, 3.0};  ///< s: the car behind the ego's time gap, dense traffic
 };
 
 /// How the expert re-plans in closed loop (docs/closed_loop.md).

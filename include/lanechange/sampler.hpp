@@ -31,10 +31,15 @@ class ScenarioSampler {
  public:
   ScenarioSampler(Config config, std::uint64_t seed);
   /// Scenario `index`. With no behavior given, it is drawn too (uniformly).
+  /// The paper's three cars, or dense traffic where sampler.target_lane_cars
+  /// asks for it.
   [[nodiscard]] Scenario sample(std::uint64_t index,
                                 std::optional<Behavior> behavior = std::nullopt) const;
 
  private:
+  [[nodiscard]] Scenario three_cars(Rng& rng, Behavior behavior) const;
+  [[nodiscard]] Scenario dense(Rng& rng, Behavior behavior) const;
+
   Config config_;
   std::uint64_t seed_;
 };

@@ -133,6 +133,11 @@ void Config::validate() const {
           "sampler", "speeds must not be negative");
   require(sampler.leader_headway.lo >= 0, "sampler.leader_headway", "must not be negative");
   require(sampler.gap_length.lo >= 0, "sampler.gap_length", "must not be negative");
+  const Interval cars = sampler.target_lane_cars;
+  require(cars.lo >= 0 && cars.hi <= 100 && cars.lo == std::floor(cars.lo) &&
+              cars.hi == std::floor(cars.hi),
+          "sampler.target_lane_cars", "must be whole numbers in [0, 100]");
+  require(sampler.rear_headway.lo >= 0, "sampler.rear_headway", "must not be negative");
   validate_closed_loop(closed_loop);
   validate_dwa(dwa);
   validate_lattice(lattice);

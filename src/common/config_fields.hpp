@@ -158,6 +158,8 @@ void visit_fields(V& v, S& s) requires std::same_as<std::remove_const_t<S>, Samp
   v("follower_offset", s.follower_offset);
   v("gap_length", s.gap_length);
   v("accel", s.accel);
+  v("target_lane_cars", s.target_lane_cars);
+  v("rear_headway", s.rear_headway);
 }
 
 template <class V, class S>

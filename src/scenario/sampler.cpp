@@ -1,6 +1,9 @@
 #include "lanechange/sampler.hpp"
 
 #include <algorithm>
+#include <cmath>
+#include <string>
+#include <vector>
 
 namespace lanechange {
 
@@ -29,11 +32,18 @@ ScenarioSampler::ScenarioSampler(Config config, std::uint64_t seed)
 
 Scenario ScenarioSampler::sample(std::uint64_t index, std::optional<Behavior> behavior) const {
   Rng rng(scenario_seed(seed_, index));
-  const SamplerSettings& p = config_.sampler;
-  Scenario s = three_car_scenario(config_);
   // Draw every number, used or not, so that a scenario's cars do not depend on its behavior.
   const int behavior_draw = static_cast<int>(rng.uniform(0.0, 3.0));
-  s.set_behavior(behavior.value_or(static_cast<Behavior>(behavior_draw)));
+  const Behavior b = behavior.value_or(static_cast<Behavior>(behavior_draw));
+  Scenario s = config_.sampler.target_lane_cars.hi > 0 ? dense(rng, b) : three_cars(rng, b);
+  validate_scenario(s);
+  return s;
+}
+
+Scenario ScenarioSampler::three_cars(Rng& rng, Behavior behavior) const {
+  const SamplerSettings& p = config_.sampler;
+  Scenario s = three_car_scenario(config_);
+  s.set_behavior(behavior);
   s.leader().v = rng.uniform(p.leader_speed);
   s.follower().v = rng.uniform(p.follower_speed);
   s.target().v = rng.uniform(p.target_speed);
@@ -50,7 +60,48 @@ Scenario ScenarioSampler::sample(std::uint64_t index, std::optional<Behavior> be
     s.follower().a = a_follower;
     s.target().a = a_target;
   }
-  validate_scenario(s);
+  return s;
+}
+
+// A leader and a car behind in the ego lane, and a platoon of the drawn size
+// in the target lane whose bumper gaps are drawn as the paper's one gap is;
+// the ego stands anywhere along the platoon. Roles go to the nearest cars.
+Scenario ScenarioSampler::dense(Rng& rng, Behavior behavior) const {
+  const SamplerSettings& p = config_.sampler;
+  Scenario s = default_scenario(config_);
+  s.behavior = behavior;
+  const double length = s.vehicle.length;
+  auto add = [&s, &rng, &p, behavior](std::string id, Lane lane, double x, double v) {
+    const double a = rng.uniform(p.accel);
+    s.cars.push_back({std::move(id),
+                      lane,
+                      {x, v, behavior == Behavior::ConstantAccel ? a : 0.0},
+                      behavior,
+                      std::nullopt});
+  };
+  const double leader_v = rng.uniform(p.leader_speed);
+  s.ego.v = leader_v * rng.uniform(p.ego_speed_ratio);
+  add("leader", Lane::Ego,
+      s.ego.x + std::max(rng.uniform(p.leader_headway) * s.ego.v, length + 1.0), leader_v);
+  const double rear_v = rng.uniform(p.follower_speed);
+  add("rear", Lane::Ego, s.ego.x - std::max(rng.uniform(p.rear_headway) * rear_v, length + 1.0),
+      rear_v);
+  const auto count =
+      static_cast<int>(std::floor(rng.uniform(p.target_lane_cars.lo, p.target_lane_cars.hi + 1.0)));
+  std::vector<double> gaps;
+  double span = 0.0;
+  for (int i = 0; i < count; ++i) {
+    gaps.push_back(i == 0 ? 0.0 : length + rng.uniform(p.gap_length));
+    span += gaps.back();
+  }
+  double x = s.ego.x - rng.uniform(0.0, 1.0) * span;
+  for (int i = 0; i < count; ++i) {
+    x += gaps[static_cast<std::size_t>(i)];
+    std::string id = "t";  // appended: GCC 12 misreads "t" + to_string (-Wrestrict)
+    id += std::to_string(i);
+    add(std::move(id), Lane::Target, x, rng.uniform(p.target_speed));
+  }
+  for (const Role role : kRoles) s.roles[static_cast<std::size_t>(role)] = nearest_in_role(s, role);
   return s;
 }
 

@@ -1,7 +1,9 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <nlohmann/json.hpp>
 
+#include "lanechange/error.hpp"
 #include "lanechange/sampler.hpp"
 
 namespace lanechange {
@@ -56,6 +58,52 @@ TEST(Sampler, FixedBehaviorKeepsTheCars) {
   EXPECT_EQ(idm.behavior, Behavior::Idm);
   EXPECT_DOUBLE_EQ(idm.target().x, cs.target().x);
   EXPECT_DOUBLE_EQ(idm.ego.v, cs.ego.v);
+}
+
+// sampler.target_lane_cars: a leader and a car behind in the ego lane, and
+// every count of the range in the target lane, back to front.
+TEST(Sampler, DenseTrafficDrawsEveryCountOfTheRange) {
+  Config config;
+  config.sampler.target_lane_cars = {4.0, 10.0};
+  const ScenarioSampler sampler(config, 11);
+  int fewest = 100;
+  int most = 0;
+  for (std::uint64_t i = 0; i < 300; ++i) {
+    const Scenario s = sampler.sample(i);
+    ASSERT_GE(s.car_count(), 2U);
+    const int in_target_lane = static_cast<int>(s.car_count()) - 2;
+    fewest = std::min(fewest, in_target_lane);
+    most = std::max(most, in_target_lane);
+    EXPECT_EQ(s.cars[0].lane, Lane::Ego);
+    EXPECT_GT(s.cars[0].state.x, s.ego.x);
+    EXPECT_LT(s.cars[1].state.x, s.ego.x);
+    for (std::size_t c = 0; c < s.car_count(); ++c) {
+      EXPECT_EQ(s.cars[c].behavior, s.behavior);
+      if (c > 2) {
+        EXPECT_GE(s.car(c).x - s.car(c - 1).x, s.vehicle.length + config.sampler.gap_length.lo);
+      }
+    }
+    EXPECT_EQ(s.roles[0], nearest_in_role(s, Role::Leader));
+    EXPECT_EQ(s.roles[1], nearest_in_role(s, Role::Follower));
+    EXPECT_EQ(s.roles[2], nearest_in_role(s, Role::Target));
+    EXPECT_NO_THROW(validate_scenario(s));
+  }
+  EXPECT_EQ(fewest, 4);
+  EXPECT_EQ(most, 10);
+  // The same index gives the same scene, and the default still the paper's.
+  EXPECT_EQ(scenario_to_json(sampler.sample(7)), scenario_to_json(sampler.sample(7)));
+  EXPECT_EQ(ScenarioSampler(Config{}, 11).sample(7).car_count(), 3U);
+}
+
+TEST(Sampler, ACountRangeMustBeWholeNumbers) {
+  Config config;
+  config.sampler.target_lane_cars = {2.5, 4.0};
+  try {
+    config.validate();
+    FAIL() << "accepted a fractional count";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.field(), "sampler.target_lane_cars");
+  }
 }
 
 }  // namespace
