@@ -53,14 +53,26 @@ int env_int(const char* name, int fallback) {
   return v != nullptr ? std::atoi(v) : fallback;
 }
 
+std::vector<lc::Scenario> sampled(const lc::Config& config) {
+  const lc::ScenarioSampler sampler(config, kSeed);
+  std::vector<lc::Scenario> out;
+  const int count = env_int("LANECHANGE_BENCH_SCENARIOS", 100);
+  out.reserve(static_cast<std::size_t>(std::max(count, 0)));
+  for (int i = 0; i < count; ++i) out.push_back(sampler.sample(static_cast<std::uint64_t>(i)));
+  return out;
+}
+
 const std::vector<lc::Scenario>& scenarios() {
+  static const std::vector<lc::Scenario> all = sampled(lc::Config{});
+  return all;
+}
+
+// Dense traffic with eight cars in the target lane (docs/scenarios.md).
+const std::vector<lc::Scenario>& eight_car_scenarios() {
   static const std::vector<lc::Scenario> all = [] {
-    const lc::ScenarioSampler sampler(lc::Config{}, kSeed);
-    std::vector<lc::Scenario> out;
-    const int count = env_int("LANECHANGE_BENCH_SCENARIOS", 100);
-    out.reserve(static_cast<std::size_t>(std::max(count, 0)));
-    for (int i = 0; i < count; ++i) out.push_back(sampler.sample(static_cast<std::uint64_t>(i)));
-    return out;
+    lc::Config config;
+    config.sampler.target_lane_cars = {8.0, 8.0};
+    return sampled(config);
   }();
   return all;
 }
@@ -88,9 +100,9 @@ const std::vector<ex::LaneChangeQp>& first_round_problems() {
 
 struct Samples {
   std::vector<double> fast_solve_ms, square_root_solve_ms, dense_solve_ms, reference_solve_ms,
-      plan_ms, fixed_gap_plan_ms;
+      plan_ms, fixed_gap_plan_ms, eight_car_plan_ms;
   std::vector<long> plan_allocations, plan_bytes;
-  std::vector<bool> plan_converged, fixed_gap_converged;  // per plan, as the times
+  std::vector<bool> plan_converged, fixed_gap_converged, eight_car_converged;  // per plan
 };
 Samples g_samples;
 
@@ -162,11 +174,12 @@ void BM_ReferenceSolve(benchmark::State& state) {
 // Whole plans under `config`, timed into `ms`; `count_heap` also records
 // the heap use of every plan after the first.
 void plan_all(benchmark::State& state, const lc::Config& config, std::vector<double>& ms,
-              std::vector<bool>& converged, bool count_heap) {
+              std::vector<bool>& converged, bool count_heap,
+              const std::vector<lc::Scenario>& scenes = scenarios()) {
   const ex::ExpertPlanner planner(config, std::make_shared<ex::FastLaneChangeSolver>());
   std::size_t i = 0;
   for (auto _ : state) {
-    const auto& s = scenarios()[i % scenarios().size()];
+    const auto& s = scenes[i % scenes.size()];
     const long allocations = g_allocations.load();
     const long bytes = g_bytes.load();
     const double t0 = thread_cpu_ms();
@@ -191,6 +204,12 @@ void BM_FastPlanFixedGap(benchmark::State& state) {
   lc::Config config;
   config.expert.gap = lc::GapChoice::Fixed;
   plan_all(state, config, g_samples.fixed_gap_plan_ms, g_samples.fixed_gap_converged, false);
+}
+
+// Plans among eight cars of the target lane: one exact MIQP per gap (nine).
+void BM_FastPlanEightCars(benchmark::State& state) {
+  plan_all(state, lc::Config{}, g_samples.eight_car_plan_ms, g_samples.eight_car_converged, false,
+           eight_car_scenarios());
 }
 
 template <class T>
@@ -295,6 +314,15 @@ void print_summary() {
   std::printf("full plan: mean %.3f ms, 90th percentile %.3f ms (%.0f plans per second of CPU)\n",
               mean, quantile(g_samples.plan_ms, 0.9), mean > 0 ? 1000.0 / mean : 0.0);
   print_gap_choice_cost();
+  if (!g_samples.eight_car_plan_ms.empty()) {
+    const auto& converged = g_samples.eight_car_converged;
+    std::printf(
+        "plan with eight cars in the target lane (gap choice): median %.3f ms, 99th percentile "
+        "%.3f ms, largest %.3f ms over %zu plans (%ld converged)\n",
+        median(g_samples.eight_car_plan_ms), quantile(g_samples.eight_car_plan_ms, 0.99),
+        quantile(g_samples.eight_car_plan_ms, 1.0), g_samples.eight_car_plan_ms.size(),
+        static_cast<long>(std::count(converged.begin(), converged.end(), true)));
+  }
   std::printf("heap per plan: median %.0f allocations, %.0f bytes; process peak RSS %ld KiB\n",
               median(g_samples.plan_allocations), median(g_samples.plan_bytes), usage.ru_maxrss);
 }
@@ -307,6 +335,7 @@ BENCHMARK(BM_FastSolveDense)->Unit(benchmark::kMillisecond)->Iterations(fast_sol
 BENCHMARK(BM_ReferenceSolve)->Unit(benchmark::kMillisecond)->Iterations(reference_scenarios());
 BENCHMARK(BM_FastPlan)->Unit(benchmark::kMillisecond)->Iterations(300);
 BENCHMARK(BM_FastPlanFixedGap)->Unit(benchmark::kMillisecond)->Iterations(300);
+BENCHMARK(BM_FastPlanEightCars)->Unit(benchmark::kMillisecond)->Iterations(100);
 
 int main(int argc, char** argv) {
   benchmark::Initialize(&argc, argv);
