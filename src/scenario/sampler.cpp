@@ -83,9 +83,16 @@ Scenario ScenarioSampler::dense(Rng& rng, Behavior behavior) const {
   s.ego.v = leader_v * rng.uniform(p.ego_speed_ratio);
   add("leader", Lane::Ego,
       s.ego.x + std::max(rng.uniform(p.leader_headway) * s.ego.v, length + 1.0), leader_v);
-  const double rear_v = rng.uniform(p.follower_speed);
-  add("rear", Lane::Ego, s.ego.x - std::max(rng.uniform(p.rear_headway) * rear_v, length + 1.0),
-      rear_v);
+  // The car behind drives about as fast as the ego, and at least as far back
+  // as it follows the ego without braking (Krauss's safe speed at its own):
+  // a scene does not start with the ego forcing it to brake.
+  const double rear_v = s.ego.v * rng.uniform(p.ego_speed_ratio);
+  const TrafficSettings& t = config_.traffic;
+  const double calm_gap = s.ego.v * t.reaction_time +
+                          std::max(0.0, rear_v - s.ego.v) *
+                              ((s.ego.v + rear_v) / (2.0 * t.follow_decel) + t.reaction_time);
+  const double rear_gap = std::max({rng.uniform(p.rear_headway) * rear_v, calm_gap, 1.0});
+  add("rear", Lane::Ego, s.ego.x - length - rear_gap, rear_v);
   const auto count =
       static_cast<int>(std::floor(rng.uniform(p.target_lane_cars.lo, p.target_lane_cars.hi + 1.0)));
   std::vector<double> gaps;
