@@ -7,6 +7,7 @@
 #include <cstddef>
 #include <nlohmann/json_fwd.hpp>
 #include <optional>
+#include <span>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -137,6 +138,13 @@ struct Scenario {
 /// "target", in Role order and with those roles), all at x = 0: the shape of
 /// a format-1 scene, for the caller to place.
 [[nodiscard]] Scenario three_car_scenario(const Config& defaults);
+
+/// The car of `lane` nearest the position x, ahead of it (x_car > x) or at
+/// or behind it, with the cars where `now` puts them (one state per car of
+/// `scene`, in its order); none where that side of the lane is empty.
+[[nodiscard]] std::optional<CarIndex> nearest_in_lane(const Scenario& scene,
+                                                      std::span<const CarState> now, Lane lane,
+                                                      double x, bool ahead);
 
 /// The car that plays `role` by the cars' places at t = 0: the nearest car
 /// ahead of the ego in its lane (leader), and the cars of the target lane

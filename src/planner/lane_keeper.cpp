@@ -98,14 +98,10 @@ LaneCar lane_car(const Observation& o, CarIndex car) {
 
 // The car of the lane nearest the ego ahead of it (ahead) or behind it.
 std::optional<LaneCar> nearest_in_lane(const Observation& o, bool target_lane, bool ahead) {
-  const Lane lane = target_lane ? Lane::Target : Lane::Ego;
-  std::optional<LaneCar> best;
-  for (CarIndex i = 0; i < o.cars.size(); ++i) {
-    const double x = o.car(i).x;
-    if (o.scene->cars[i].lane != lane || (x > o.ego.x) != ahead) continue;
-    if (!best || (ahead ? x < best->state.x : x > best->state.x)) best = lane_car(o, i);
-  }
-  return best;
+  const auto car = lanechange::nearest_in_lane(
+      *o.scene, o.cars, target_lane ? Lane::Target : Lane::Ego, o.ego.x, ahead);
+  if (!car) return std::nullopt;
+  return lane_car(o, *car);
 }
 
 }  // namespace

@@ -110,16 +110,23 @@ Scenario three_car_scenario(const Config& defaults) {
   return s;
 }
 
-std::optional<CarIndex> nearest_in_role(const Scenario& s, Role role) {
-  const Lane lane = role == Role::Leader ? Lane::Ego : Lane::Target;
-  const bool ahead = role != Role::Follower;
+std::optional<CarIndex> nearest_in_lane(const Scenario& s, std::span<const CarState> now, Lane lane,
+                                        double x, bool ahead) {
   std::optional<CarIndex> best;
-  for (CarIndex i = 0; i < s.cars.size(); ++i) {
-    const double x = s.car(i).x;
-    if (s.cars[i].lane != lane || (x > s.ego.x) != ahead) continue;
-    if (!best || (ahead ? x < s.car(*best).x : x > s.car(*best).x)) best = i;
+  for (CarIndex i = 0; i < now.size(); ++i) {
+    const double at = now[i].x;
+    if (s.cars[i].lane != lane || (at > x) != ahead) continue;
+    if (!best || (ahead ? at < now[*best].x : at > now[*best].x)) best = i;
   }
   return best;
+}
+
+std::optional<CarIndex> nearest_in_role(const Scenario& s, Role role) {
+  std::vector<CarState> start;
+  start.reserve(s.car_count());
+  for (const OtherCar& car : s.cars) start.push_back(car.state);
+  return nearest_in_lane(s, start, role == Role::Leader ? Lane::Ego : Lane::Target, s.ego.x,
+                         role != Role::Follower);
 }
 
 namespace {
