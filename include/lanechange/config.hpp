@@ -145,6 +145,12 @@ struct ExpertSettings {
   /// its safe distance (NOTES.md), or at the target itself (authors' code).
   bool aim_behind_target = true;
   GapChoice gap = GapChoice::Best;
+  /// m/s^2: the hardest braking a plan may force on the car it cuts in ahead
+  /// of, as the traffic model has that car react (MOBIL's b_safe): the ego
+  /// keeps, behind it, the larger of Eq. 1's distance and the gap at which
+  /// the car brakes no harder. Below closed_loop.unsafe_decel, for the
+  /// linearization's slack. None (JSON null): Eq. 1 alone, the paper.
+  std::optional<double> cut_in_decel = 3.5;
 };
 
 /// What a drop of y is measured from, for "y never decreases".
@@ -408,6 +414,10 @@ struct Config {
 /// The paper's traffic: cars that ignore everything, IDM without a braking
 /// limit. The `authors` preset's, and the reproduction's (docs/traffic.md).
 [[nodiscard]] TrafficSettings paper_traffic();
+/// `config` with the paper's own formulation: Eq. 1's one gap and distances
+/// (`expert.gap = fixed`, no cut-in rule) in the paper's traffic. What the
+/// reproduction of the paper's tables runs (docs/experiments.md).
+[[nodiscard]] Config paper_formulation(Config config);
 [[nodiscard]] std::vector<std::string> preset_names();
 
 void to_json(nlohmann::json& out, const Config& config);

@@ -3,6 +3,7 @@
 // at traffic_max_speed when speeding up, if the config sets one) or the
 // Intelligent Driver Model. The same step
 // serves a planner's prediction and the closed-loop simulation.
+#include <optional>
 #include <vector>
 
 #include "lanechange/config.hpp"
@@ -38,6 +39,30 @@ void advance_constant_accel(CarState& car, double dt, double cap);
 /// stop behind it, braking at `decel` after `reaction_time`.
 [[nodiscard]] double krauss_safe_speed(double gap, double speed, double leader_speed,
                                        double reaction_time, double decel);
+
+/// The gap (bumper to bumper, m) a car keeps to brake no harder than some
+/// deceleration, as a function of its leader's speed near one speed:
+/// gap + slope * (leader speed - that speed).
+struct SafeGapLine {
+  double gap = 0.0;    ///< m, at the leader speed it was taken at
+  double slope = 0.0;  ///< s: per m/s of leader speed
+  [[nodiscard]] double at(double leader_speed, double taken_at) const {
+    return gap + slope * (leader_speed - taken_at);
+  }
+};
+
+/// The shortest gap behind a leader at `leader_speed` at which a car of
+/// `behavior` at `speed` brakes no harder than `decel` in its next step of
+/// `dt`, by the model that moves it, with its slope in the leader's speed:
+/// IDM's (linear in the leader's speed wherever the car closes in; an IDM car
+/// that brakes harder on a free road gets its desired gap), or the tangent of
+/// Krauss's under traffic.followers_react (concave in the leader's speed, so
+/// the tangent asks at least as much everywhere). None for a car that
+/// ignores the cars ahead.
+[[nodiscard]] std::optional<SafeGapLine> gap_braking_at_most(double decel, Behavior behavior,
+                                                             double speed, double leader_speed,
+                                                             double dt, const IdmParameters& idm,
+                                                             const TrafficSettings& traffic);
 
 /// Whether any car of the scene reacts to the ego (IDM, or any car under
 /// traffic.followers_react): a prediction then depends on the ego's path.

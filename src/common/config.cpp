@@ -102,6 +102,8 @@ void Config::validate() const {
           "must be positive, or null for no cap");
   require(traffic.reaction_time > 0, "traffic.reaction_time", "must be positive");
   require(traffic.follow_decel > 0, "traffic.follow_decel", "must be positive");
+  require(!expert.cut_in_decel || *expert.cut_in_decel > 0, "expert.cut_in_decel",
+          "must be positive or null");
   require(!traffic.max_decel || *traffic.max_decel > 0, "traffic.max_decel",
           "must be positive, or null for no limit");
   require(closed_loop.unsafe_decel > 0, "closed_loop.unsafe_decel", "must be positive");
@@ -158,6 +160,13 @@ TrafficSettings paper_traffic() {
   return t;
 }
 
+Config paper_formulation(Config config) {
+  config.expert.gap = GapChoice::Fixed;
+  config.expert.cut_in_decel = std::nullopt;
+  config.traffic = paper_traffic();
+  return config;
+}
+
 namespace {
 
 // The authors' public MATLAB code (NOTES.md and reference/README.md).
@@ -178,6 +187,7 @@ Config authors_preset() {
   c.expert.aim_behind_target = false;
   c.expert.globalisation = Globalisation::Off;  // more than 10 rounds is a failure there
   c.expert.gap = GapChoice::Fixed;
+  c.expert.cut_in_decel = std::nullopt;
   c.traffic_integration = TrafficIntegration::Euler;
   c.traffic = paper_traffic();
   c.sampler.target_speed = {20.0 / 3.6, 40.0 / 3.6};

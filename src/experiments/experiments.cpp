@@ -36,6 +36,8 @@ const std::vector<Behavior> kBehaviors = {Behavior::ConstantSpeed, Behavior::Con
 // Learning and evaluation never share scenes: other seeds.
 constexpr std::uint64_t kDataSeed = 101;
 constexpr std::uint64_t kEvalSeed = 2026;
+// The dense-traffic Table II: cars in the target lane per scene.
+constexpr Interval kDenseTargetLaneCars{4.0, 10.0};
 constexpr std::uint64_t kTrainSeed = 1;
 constexpr double kTestShare = 0.2;  // the paper's 1000 of 5000
 // DAgger's training scenes (docs/dagger.md's seed), and every 2nd step labelled.
@@ -355,6 +357,21 @@ ExperimentReport run_experiments(const ExperimentOptions& o) {
     (void)stages.run("evaluate-either_or", eval_inputs, {"eval/either_or"}, StageRunner::Ranks::All,
                      [&] { evaluate_sets(c, "eval/either_or", either_or, expert_planners); });
   }
+  // Every planner again on the same scenes under the paper's own formulation
+  // and traffic, so that the reproduction of the paper stays visible.
+  eval_inputs["planners"] = planners;
+  eval_inputs.erase("lane_rule");
+  eval_inputs["formulation"] = "paper";
+  (void)stages.run("evaluate-paper", eval_inputs, {"eval/paper"}, StageRunner::Ranks::All,
+                   [&] { evaluate_sets(c, "eval/paper", paper_formulation(o.config), planners); });
+  // And in dense traffic: the same count of scenes, each with a platoon in
+  // the target lane.
+  Config dense = o.config;
+  dense.sampler.target_lane_cars = kDenseTargetLaneCars;
+  eval_inputs.erase("formulation");
+  eval_inputs["target_lane_cars"] = {kDenseTargetLaneCars.lo, kDenseTargetLaneCars.hi};
+  (void)stages.run("evaluate-dense", eval_inputs, {"eval/dense"}, StageRunner::Ranks::All,
+                   [&] { evaluate_sets(c, "eval/dense", dense, planners); });
   json figure_inputs = {{"evaluation", footprint}, {"labels", labels}};
   if (runs_dagger(c)) {
     figure_inputs["dagger"] = stages.run("dagger",
@@ -407,6 +424,10 @@ ExperimentReport run_experiments(const ExperimentOptions& o) {
       if (!uses_the_expert(r.planner)) report.either_or.push_back(r);
     }
   }
+  report.paper = read_all_rollouts(c, "eval/paper");
+  report.dense = read_all_rollouts(c, "eval/dense");
+  report.dense_target_lane_cars = kDenseTargetLaneCars;
+  report.car_decel_limit = o.config.traffic.max_decel;
   report.labels = expert_labels;
   if (runs_dagger(c)) {
     const auto d = dagger_options(c);

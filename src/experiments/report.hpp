@@ -28,6 +28,10 @@ struct ReportInputs {
   nlohmann::json metrics;                    ///< the model's metrics.json
   std::vector<sim::RolloutRow> footprint;    ///< the default lane rule
   std::vector<sim::RolloutRow> either_or;    ///< the literal rule (baselines' rows copied)
+  std::vector<sim::RolloutRow> paper;        ///< the paper's formulation and traffic
+  std::vector<sim::RolloutRow> dense;        ///< dense traffic, the default formulation
+  Interval dense_target_lane_cars;
+  std::optional<double> car_decel_limit;  ///< traffic.max_decel of the run
   ExpertLabels labels;
   std::vector<ExampleScene> examples;
   std::optional<dagger::DaggerReport> dagger;  ///< none when DAgger did not run

@@ -228,8 +228,8 @@ Table svm_confusion_table(const nlohmann::json& metrics) {
 Table comparison_table(const std::vector<sim::RolloutRow>& rows,
                        const std::vector<std::string>& planners) {
   Table t{{"planner", "scenes", "success", "success where miqp succeeds", "collision (at fault)",
-           "aborted", "take-overs / rollout", "step ms p50", "step ms p99", "step ms max",
-           "RMS jerk", "max abs(a) p95", "paper: success / time"},
+           "unsafe cut-in", "aborted", "take-overs / rollout", "step ms p50", "step ms p99",
+           "step ms max", "RMS jerk", "max abs(a) p95", "paper: success / time"},
           {}};
   for (const auto& planner : planners) {
     const auto mine = of_planner(rows, planner);
@@ -241,6 +241,7 @@ Table comparison_table(const std::vector<sim::RolloutRow>& rows,
          success_where_miqp_succeeds(rows, planner),
          percent(count(mine, [](const auto* r) { return r->collision; }), n) + " (" +
              percent(count(mine, [](const auto* r) { return r->at_fault; }), n) + ")",
+         percent(count(mine, [](const auto* r) { return r->unsafe_cut_in; }), n),
          percent(count(mine, [](const auto* r) { return r->outcome == "aborted"; }), n),
          fixed(mean(column(mine, &sim::RolloutRow::takeovers)), 2),
          significant(run::nearest_rank(column(mine, &sim::RolloutRow::median_step_ms), 0.5)),
@@ -251,6 +252,19 @@ Table comparison_table(const std::vector<sim::RolloutRow>& rows,
          paper == kPaperComparison.end() ? "–" : paper->second});
   }
   return t;
+}
+
+std::string traffic_check(const std::vector<sim::RolloutRow>& rows, std::optional<double> limit) {
+  long long overlaps = 0;
+  double hardest = 0.0;
+  for (const auto& r : rows) {
+    overlaps += r.cars_collide ? 1 : 0;
+    hardest = std::max(hardest, r.max_car_decel);
+  }
+  return std::to_string(overlaps) + " of " + std::to_string(rows.size()) +
+         " rollouts show two other cars overlapping; the hardest braking of any car is " +
+         fixed(hardest, 2) + " m/s^2" +
+         (limit ? " (limit `traffic.max_decel`: " + fixed(*limit, 2) + ")" : " (no limit set)");
 }
 
 Table behavior_table(const std::vector<sim::RolloutRow>& rows,

@@ -3,6 +3,7 @@
 // rollouts, the expert's open-loop labels), with the paper's numbers beside.
 #include <map>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -27,6 +28,10 @@ using ExpertLabels = std::map<std::pair<std::string, long long>, std::string>;
 /// Table II: per planner, rates, take-overs, step time and comfort.
 [[nodiscard]] Table comparison_table(const std::vector<sim::RolloutRow>& rows,
                                      const std::vector<std::string>& planners);
+/// One sentence on the traffic itself: how many rollouts show two other cars
+/// overlapping, and the hardest braking of any car against `limit`.
+[[nodiscard]] std::string traffic_check(const std::vector<sim::RolloutRow>& rows,
+                                        std::optional<double> limit);
 /// Table III: success per behavior and planner.
 [[nodiscard]] Table behavior_table(const std::vector<sim::RolloutRow>& rows,
                                    const std::vector<std::string>& planners);

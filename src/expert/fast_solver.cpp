@@ -354,18 +354,45 @@ bool initial_state_allowed(const LaneChangeQp& qp) {
 
 namespace {
 
+// Cuts the box [lo, hi] to the row g'z <= upper: each component's bound
+// given the least the others can contribute. The row is widened by a margin
+// that keeps any point the QP would accept (its rows hold to about 1e-6).
+void cut_to_row(const HalfSpace& h, State& lo, State& hi) {
+  const double upper = h.upper + kBoxMargin * (1.0 + std::abs(h.upper));
+  for (int j = 0; j < 4; ++j) {
+    const double g = h.g[j];
+    if (g == 0.0) continue;
+    double rest = 0.0;
+    for (int i = 0; i < 4; ++i) {
+      if (i != j && h.g[i] != 0.0) rest += h.g[i] * (h.g[i] > 0.0 ? lo[i] : hi[i]);
+    }
+    if (!std::isfinite(rest)) continue;
+    if (g > 0.0) hi[j] = std::min(hi[j], (upper - rest) / g);
+    if (g < 0.0) lo[j] = std::max(lo[j], (upper - rest) / g);
+  }
+}
+
+// Empty beyond the margin that keeps any point the QP would accept.
+bool empty_box(const State& lo, const State& hi) {
+  const State slack = kBoxMargin * (State::Ones() + lo.cwiseAbs());
+  return (lo.array() > (hi + slack).array()).any();
+}
+
 // Bit m for each lane mode of node k that some state of the box [lo, hi]
-// could satisfy; a mode with a row that the whole box breaks cannot hold.
+// could satisfy: the box cut to the mode's rows, each row's bound given the
+// others' at their best, stays non-empty. A gap shorter than its two safe
+// distances shows here, where no row alone misses the box.
 unsigned modes_meeting_box(const LaneChangeQp& qp, int k, const State& lo, const State& hi) {
   unsigned possible = 0;
   const auto& modes = qp.node_modes[k];
   for (std::size_t m = 0; m < modes.size(); ++m) {
-    bool holds = true;
-    for (const HalfSpace& h : modes[m].rows) {
-      const double margin = 1e-6 * (1.0 + std::abs(h.upper));  // rounding: keep a doubtful mode
-      holds = holds && least_over_box(h.g, lo, hi) <= h.upper + margin;
+    State mode_lo = lo;
+    State mode_hi = hi;
+    // Twice: a row cut by a later one may cut again.
+    for (int pass = 0; pass < 2; ++pass) {
+      for (const HalfSpace& h : modes[m].rows) cut_to_row(h, mode_lo, mode_hi);
     }
-    if (holds) possible |= 1U << m;
+    if (!empty_box(mode_lo, mode_hi)) possible |= 1U << m;
   }
   return possible;
 }
@@ -419,24 +446,6 @@ void find_possible_modes(const LaneChangeQp& qp, FastWorkspace& ws) {
   }
 }
 
-// Cuts the box [lo, hi] to the row g'z <= upper: each component's bound
-// given the least the others can contribute. The row is widened by a margin
-// that keeps any point the QP would accept (its rows hold to about 1e-6).
-void cut_to_row(const HalfSpace& h, State& lo, State& hi) {
-  const double upper = h.upper + kBoxMargin * (1.0 + std::abs(h.upper));
-  for (int j = 0; j < 4; ++j) {
-    const double g = h.g[j];
-    if (g == 0.0) continue;
-    double rest = 0.0;
-    for (int i = 0; i < 4; ++i) {
-      if (i != j && h.g[i] != 0.0) rest += h.g[i] * (h.g[i] > 0.0 ? lo[i] : hi[i]);
-    }
-    if (!std::isfinite(rest)) continue;
-    if (g > 0.0) hi[j] = std::min(hi[j], (upper - rest) / g);
-    if (g < 0.0) lo[j] = std::max(lo[j], (upper - rest) / g);
-  }
-}
-
 }  // namespace
 
 bool modes_can_hold(const LaneChangeQp& qp, const std::vector<int>& modes) {
@@ -452,8 +461,7 @@ bool modes_can_hold(const LaneChangeQp& qp, const std::vector<int>& modes) {
         for (const HalfSpace& h : choices[static_cast<std::size_t>(m)].rows) cut_to_row(h, lo, hi);
       }
     }
-    const State slack = kBoxMargin * (State::Ones() + lo.cwiseAbs());
-    if ((lo.array() > (hi + slack).array()).any()) return false;
+    if (empty_box(lo, hi)) return false;
     hi = hi.cwiseMax(lo);  // within the margin: a point, not an empty box
   }
   return true;

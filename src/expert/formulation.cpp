@@ -4,7 +4,10 @@
 #include <cmath>
 #include <initializer_list>
 #include <numbers>
+#include <optional>
 #include <string>
+
+#include "lanechange/traffic.hpp"
 
 namespace lanechange::expert {
 
@@ -82,9 +85,33 @@ HalfSpace ahead_of(const SafeDistance& d, double car_x, double car_v) {
   return row(-1.0, 0.0, 0.0, -(car_x + d.standstill + d.time_headway * car_v));
 }
 
-CarRows car_rows(const Scenario& s, const TrafficPrediction& p, int index, const Gap& gap) {
+// x_car + gap(v_ego) + half lengths <= x_ego, the gap at which the car that
+// the ego cuts in ahead of brakes no harder than expert.cut_in_decel (MOBIL's
+// safety criterion), linear in the ego's speed about the point's; none where
+// the car does not react to the ego or the config sets no limit.
+std::optional<HalfSpace> cut_in_row(const Scenario& s, const Config& config, CarIndex c,
+                                    double car_x, double car_v, double ego_speed, double dt) {
+  const auto& decel = config.expert.cut_in_decel;
+  if (!decel) return std::nullopt;
+  const std::optional<SafeGapLine> line =
+      gap_braking_at_most(*decel, s.cars[c].behavior, car_v, ego_speed, dt, s.idm, config.traffic);
+  if (!line) return std::nullopt;
+  const double centres = 0.5 * (s.size_of(c).length + s.vehicle.length);
+  return row(-1.0, 0.0, line->slope, -(car_x + centres + line->gap - line->slope * ego_speed));
+}
+
+// What one node's rows need beyond the scene: where in the prediction it
+// looks, and the linearization point's ego speed there.
+struct NodeContext {
+  int index = 0;  ///< of the prediction, for node k
+  double ego_speed = 0.0;
+  double dt = 0.0;
+};
+
+CarRows car_rows(const Scenario& s, const Config& config, const TrafficPrediction& p,
+                 const NodeContext& node, const Gap& gap) {
   CarRows r;
-  const auto at = static_cast<std::size_t>(index);
+  const auto at = static_cast<std::size_t>(node.index);
   for (CarIndex c = 0; c < s.car_count(); ++c) {
     if (s.cars[c].lane != Lane::Ego) continue;
     if (s.car(c).x > s.ego.x) {
@@ -98,6 +125,12 @@ CarRows car_rows(const Scenario& s, const TrafficPrediction& p, int index, const
   for (const CarIndex c : gap.behind) {
     const SafeDistance d = s.centre_safe_distance(c, s.safe_distance.follower);
     r.target_lane.push_back(ahead_of(d, p.car(c).x[at], p.car(c).v[at]));
+  }
+  // Only the nearest car behind follows the ego; the others follow it.
+  if (const auto c = gap.car_behind()) {
+    const auto cut_in =
+        cut_in_row(s, config, *c, p.car(*c).x[at], p.car(*c).v[at], node.ego_speed, node.dt);
+    if (cut_in) r.target_lane.push_back(*cut_in);
   }
   for (const CarIndex c : gap.ahead) {
     const SafeDistance d = s.centre_safe_distance(c, s.safe_distance.target);
@@ -318,7 +351,8 @@ LaneChangeQp build_lane_change_qp(const Scenario& s, const Config& config, const
     const Interval heading{qp.state_lower[k][kTheta], qp.state_upper[k][kTheta]};
     const LaneGeometry lane{0.5 * s.lane_width, 0.5 * s.vehicle.width, 0.5 * s.vehicle.length,
                             reachable_headings(s, heading, k * qp.dt)};
-    qp.node_modes[k] = lane_modes(car_rows(s, prediction, index, gap), e.lane_rule, lane);
+    const NodeContext node{index, point.states[k][kV], qp.dt};
+    qp.node_modes[k] = lane_modes(car_rows(s, config, prediction, node, gap), e.lane_rule, lane);
   }
   return qp;
 }

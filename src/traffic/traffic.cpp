@@ -49,6 +49,44 @@ double krauss_safe_speed(double gap, double speed, double leader_speed, double r
                             ((leader_speed + speed) / (2.0 * decel) + reaction_time);
 }
 
+namespace {
+
+// IDM's acceleration is a_max (free - (s*/s)^2): at least -decel where
+// s >= s* / sqrt(free + decel / a_max). s* is taken on its closing-in branch,
+// linear in the leader's speed; where it is larger, Eq. 1 asks more anyway.
+SafeGapLine idm_gap_braking_at_most(double decel, double speed, double leader_speed,
+                                    const IdmParameters& p) {
+  const double interaction = speed / (2.0 * std::sqrt(p.max_accel * p.comfortable_decel));
+  const double desired_gap =
+      p.min_gap + speed * p.time_headway + interaction * (speed - leader_speed);
+  const double room = 1.0 - std::pow(speed / p.desired_speed, p.exponent) + decel / p.max_accel;
+  const double scale = room > 0.0 ? 1.0 / std::sqrt(room) : 1.0;
+  return {desired_gap * scale, -interaction * scale};
+}
+
+// Krauss's safe speed is at least speed - decel dt where
+// gap >= v_l tau + (speed - decel dt - v_l) ((v_l + speed) / (2 b) + tau).
+SafeGapLine krauss_gap_braking_at_most(double decel, double speed, double leader_speed, double dt,
+                                       const TrafficSettings& t) {
+  const double lowest_speed = speed - decel * dt;
+  const double b = t.follow_decel;
+  const double gap =
+      leader_speed * t.reaction_time +
+      (lowest_speed - leader_speed) * ((leader_speed + speed) / (2.0 * b) + t.reaction_time);
+  return {gap, -(2.0 * leader_speed + decel * dt) / (2.0 * b)};
+}
+
+}  // namespace
+
+std::optional<SafeGapLine> gap_braking_at_most(double decel, Behavior behavior, double speed,
+                                               double leader_speed, double dt,
+                                               const IdmParameters& idm,
+                                               const TrafficSettings& traffic) {
+  if (behavior == Behavior::Idm) return idm_gap_braking_at_most(decel, speed, leader_speed, idm);
+  if (!traffic.followers_react) return std::nullopt;
+  return krauss_gap_braking_at_most(decel, speed, leader_speed, dt, traffic);
+}
+
 bool traffic_reacts(const Scenario& scenario, const Config& config) {
   if (config.traffic.followers_react && scenario.car_count() > 0) return true;
   return std::any_of(scenario.cars.begin(), scenario.cars.end(),

@@ -42,17 +42,35 @@ TEST(Experiments, ATinyRunWritesEveryTableAndFigureAndARerunReusesItsStages) {
   const std::string md = testing::read_text(first.report_md);
   for (const char* section :
        {"Table I", "Table II: planners in closed loop (footprint", "Table III", "Generalization",
-        "either_or lane rule", "Example rollouts", "85.171%", "93.1%",
-        "DAgger for the action network", "fewer take-overs per rollout with every round",
+        "either_or lane rule", "Table II: planners in closed loop (the paper's formulation)",
+        "Table II: planners in closed loop (dense traffic)", "rollouts show two other cars",
+        "Example rollouts", "85.171%", "93.1%", "DAgger for the action network",
+        "fewer take-overs per rollout with every round",
         "the take-overs from states the network drove to", "taken over at the start"}) {
     EXPECT_NE(md.find(section), std::string::npos) << section;
   }
-  // Every planner has a row in Table II, and every row has a number of scenes;
-  // but the oracle, a diagnostic an exact plan per look-ahead step slows.
+  // Every planner has a row in each Table II (the default, the paper's and
+  // the dense one), and every row has a number of scenes; but the oracle, a
+  // diagnostic an exact plan per look-ahead step slows.
   for (const auto& planner : baselines::planner_names()) {
     if (planner == "mlp-miqp-oracle") continue;
-    EXPECT_NE(md.find("| " + planner + " | 3 |"), std::string::npos) << planner;
+    const std::string row = "| " + planner + " | 3 |";
+    int tables = 0;
+    for (auto at = md.find(row); at != std::string::npos; at = md.find(row, at + 1)) ++tables;
+    EXPECT_GE(tables, 3) << planner;
   }
+  // The dense scenes were drawn with a platoon in the target lane, and the
+  // paper's with its own formulation.
+  const auto parameters = [&](const std::string& run) {
+    return nlohmann::json::parse(
+               testing::read_text(o.out_dir + "/eval/" + run + "/idm/evaluation.json"))
+        .at("parameters")
+        .at("config");
+  };
+  EXPECT_EQ(parameters("dense")["sampler"]["target_lane_cars"], nlohmann::json({4.0, 10.0}));
+  EXPECT_EQ(parameters("footprint")["sampler"]["target_lane_cars"], nlohmann::json({0.0, 0.0}));
+  EXPECT_EQ(parameters("paper")["expert"]["gap"], "fixed");
+  EXPECT_EQ(parameters("paper")["traffic"]["followers_react"], false);
   // Every picture the report names exists, and the HTML embeds it. (No
   // std::regex: GCC 12 warns inside it under the sanitizers.)
   int pictures = 0;

@@ -200,13 +200,9 @@ inline Config fixed_gap_config(Config config = {}) {
   return config;
 }
 
-/// The paper's whole set-up: Eq. 1's gap alone, in the paper's traffic
+/// The paper's whole set-up: Eq. 1's gap alone and distances, in the paper's traffic
 /// (cars that ignore everything, IDM without a braking limit).
-inline Config paper_config(Config config = {}) {
-  config = fixed_gap_config(config);
-  config.traffic = paper_traffic();
-  return config;
-}
+inline Config paper_config(Config config = {}) { return paper_formulation(std::move(config)); }
 
 inline Scenario open_road_scenario(Behavior behavior = Behavior::ConstantSpeed) {
   Scenario s = three_car_scenario(Config{});

@@ -241,5 +241,43 @@ TEST(Followers, KraussSafeSpeedStopsBehindAStoppedCar) {
   EXPECT_NEAR(krauss_safe_speed(v * tau, v, v, tau, b), v, 1e-9);
 }
 
+// At the gap gap_braking_at_most gives, the model brakes the car behind the
+// ego by just the deceleration asked; a metre closer, harder.
+TEST(Followers, TheCutInGapIsWhereTheCarBrakesByTheGivenDeceleration) {
+  const Config config;
+  const double decel = 3.5, dt = 0.1;
+  for (const Behavior behavior : {Behavior::ConstantSpeed, Behavior::Idm}) {
+    for (const auto& [car_v, ego_v] :
+         {std::pair{12.0, 8.0}, std::pair{9.0, 9.0}, std::pair{10.0, 4.0}}) {
+      SCOPED_TRACE(std::string(to_string(behavior)) + " at " + std::to_string(car_v));
+      Scenario s = two_lane_scene(behavior);
+      s.target() = {200.0, car_v, 0.0};
+      const auto line =
+          gap_braking_at_most(decel, behavior, car_v, ego_v, dt, s.idm, config.traffic);
+      ASSERT_TRUE(line.has_value());
+      ASSERT_GT(line->gap, 0.0);
+      auto braking_at = [&](double gap) {
+        s.follower() = {0.0, car_v, 0.0};
+        s.ego = {gap + s.vehicle.length, s.lane_width, ego_v, 0.0, 0.0};
+        TrafficModel traffic(s, config);
+        traffic.step(dt, {s.ego.x, s.ego.y, s.ego.v});
+        return -traffic.car(car_of(Role::Follower)).a;
+      };
+      EXPECT_NEAR(braking_at(line->gap), decel, 1e-6);
+      EXPECT_GT(braking_at(line->gap - 1.0), decel);
+      // The line asks at least the gap taken at any other ego speed.
+      for (const double other : {ego_v - 2.0, ego_v + 2.0}) {
+        const auto there =
+            gap_braking_at_most(decel, behavior, car_v, other, dt, s.idm, config.traffic);
+        EXPECT_GE(line->at(other, ego_v), there->gap - 1e-9) << other;
+      }
+    }
+  }
+  Config paper;
+  paper.traffic = paper_traffic();
+  EXPECT_FALSE(gap_braking_at_most(decel, Behavior::ConstantSpeed, 12.0, 8.0, dt, IdmParameters{},
+                                   paper.traffic));
+}
+
 }  // namespace
 }  // namespace lanechange

@@ -103,7 +103,11 @@ TEST(ClosedLoop, NoGapIsAbortedWithoutCollision) {
 // another one, behind the follower or ahead of the target.
 TEST(ClosedLoop, TheExpertTakesAnotherGapWhereThePapersIsClosed) {
   const Config config = testing::untimed_config();
-  const Scenario s = no_gap();
+  // Too short for the ego, but no shorter than the follower keeps behind the
+  // target: no_gap()'s 0.6 m would have it brake hard at once.
+  Scenario s = no_gap();
+  s.follower().x = -7.0;
+  s.target().x = 6.0;
   const auto miqp = planner::make_planner("miqp", config);
   const sim::Rollout r = sim::simulate(s, *miqp, config);
   testing::expect_consistent(r, s);
@@ -112,6 +116,25 @@ TEST(ClosedLoop, TheExpertTakesAnotherGapWhereThePapersIsClosed) {
   EXPECT_TRUE(r.metrics.target_lane_slot == "behind_follower" ||
               r.metrics.target_lane_slot == "ahead_of_target")
       << r.metrics.target_lane_slot;
+}
+
+// A sampled scene whose follower, faster than the ego, Eq. 1 alone lets the
+// ego cut in ahead of so closely that it must brake at its physical limit;
+// the default expert keeps the gap at which it brakes no harder than
+// expert.cut_in_decel.
+TEST(ClosedLoop, TheExpertCutsInNoCloserThanTheCarBehindCanTakeCalmly) {
+  const Config config = testing::untimed_config();
+  const Scenario s = ScenarioSampler(config, 2026).sample(13, Behavior::ConstantSpeed);
+  Config eq1_only = config;
+  eq1_only.expert.cut_in_decel = std::nullopt;
+  const sim::Rollout close = sim::simulate(s, *planner::make_planner("miqp", eq1_only), eq1_only);
+  ASSERT_TRUE(close.metrics.unsafe_cut_in) << close.metrics.forced_decel;
+  const sim::Rollout calm = sim::simulate(s, *planner::make_planner("miqp", config), config);
+  testing::expect_consistent(calm, s);
+  EXPECT_EQ(calm.outcome, Outcome::WellPosed) << calm.reason;
+  ASSERT_TRUE(config.expert.cut_in_decel.has_value());
+  EXPECT_LE(calm.metrics.forced_decel, config.closed_loop.unsafe_decel);
+  EXPECT_FALSE(calm.trajectory.collision);
 }
 
 TEST(ClosedLoop, SampledRolloutsAreConsistent) {

@@ -661,7 +661,7 @@ std::shared_ptr<const learn::StrategyModel> model_from_expert(const Scenario& s,
 // On scenes the model has memorised, the study finds each scene's own
 // strategy first, feasible at the exact cost, and its per-scene records say so.
 TEST(Strategy, TheStudyOnMemorisedScenesFollowsTheirOwnStrategies) {
-  Config config = testing::fixed_gap_config(testing::untimed_config());
+  Config config = testing::paper_config(testing::untimed_config());
   config.expert.steps = 20;
   config.closed_loop.monotone_lateral = false;  // open loop, as the study plans
   const std::uint64_t seed = 5;

@@ -1,8 +1,9 @@
 #pragma once
 // `lanechange experiments` (docs/experiments.md): one command that runs the
 // paper's experiments end to end — expert data, models, Table I, the closed
-// loop of every planner (Tables II and III under both lane rules), the
-// generalization test, DAgger and the figures — and writes a report with the paper's
+// loop of every planner (Tables II and III under both lane rules, under the
+// paper's own formulation and in dense traffic), the generalization test,
+// DAgger and the figures — and writes a report with the paper's
 // numbers beside ours. Every stage records its inputs; a rerun reuses a stage
 // whose inputs have not changed and resumes one that was killed.
 #include <ostream>
