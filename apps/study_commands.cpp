@@ -83,6 +83,9 @@ void add_crosscheck(CLI::App& app, const ConfigSource& config) {
   cmd->add_option("--first", o.first, "Index of the first scenario");
   cmd->add_option("--steps", o.steps, "Override N (fewer steps make the reference faster)");
   cmd->add_option("--tolerance", o.tolerance, "Largest relative objective difference");
+  cmd->add_flag("--every-gap", o.every_gap,
+                "One MIQP per gap of each scene's target lane (each from the warm start aimed "
+                "into it), not Eq. 1's gap alone; with dense scenes (sampler.target_lane_cars)");
   cmd->add_option("--out", a->out_path, "JSON lines file, one case per line");
   cmd->add_option("--replay", o.replay_path,
                   "Re-solve only the fast side of the cases in an earlier --out file and compare "

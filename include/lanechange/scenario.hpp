@@ -44,6 +44,13 @@ struct CarState {
 enum class Lane { Ego, Target };
 [[nodiscard]] std::string_view to_string(Lane lane);
 
+/// Where the target lane lies as the ego drives: to its left (y > 0) or right.
+enum class Side { Left, Right };
+[[nodiscard]] std::string_view to_string(Side side);
+/// -1 for a right-hand change, whose files hold the mirror image of the scene
+/// every stage plans (y, theta and omega negated), else 1.
+[[nodiscard]] inline double mirror_sign(Side side) { return side == Side::Right ? -1.0 : 1.0; }
+
 /// The paper's three cars: the car ahead of the ego in its lane, and the two
 /// that frame Eq. 1's gap in the target lane. A scene of any size may give
 /// each role to one of its cars.
@@ -68,6 +75,9 @@ struct OtherCar {
 
 struct Scenario {
   double lane_width = 3.75;
+  /// Inside, the target lane is always to the left; a file with the target
+  /// lane to the right is read and written as the mirror image.
+  Side target_side = Side::Left;
   /// The scene's behavior: every car's in format 1, the default of a car
   /// that names none in format 2, and the class the tables group by.
   Behavior behavior = Behavior::ConstantSpeed;

@@ -39,6 +39,9 @@ struct Trajectory {
   double compute_total_ms = 0.0;
   double compute_max_step_ms = 0.0;
   double lane_width = 0.0;
+  /// As the scene's: a right-hand change is written as the mirror image of
+  /// what is held here (y, theta and omega negated) and read back the same way.
+  Side target_side = Side::Left;
   /// Planner-specific extra fields (objective, iterations, ...), written at top level.
   nlohmann::json details = nlohmann::json::object();
 

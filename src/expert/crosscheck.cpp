@@ -7,15 +7,30 @@
 
 namespace lanechange::expert {
 
-LaneChangeQp first_round_problem(const Scenario& scenario, const Config& base) {
+namespace {
+
+LaneChangeQp first_round_problem(const Scenario& scenario, const Config& base,
+                                 const Gap* aimed_at) {
   const Config config = effective_config(base, scenario);
   const int steps = scenario.steps;
   const double dt = scenario.horizon / steps;
   const int predicted = steps + config.expert.prediction_lead_steps;
   const TrafficPrediction prediction = predict_traffic(scenario, config, predicted, dt);
-  const Iterate point = warm_start(scenario, config, prediction);
+  const Iterate point = aimed_at != nullptr ? warm_start(scenario, config, prediction, *aimed_at)
+                                            : warm_start(scenario, config, prediction);
   return build_lane_change_qp(scenario, config, point,
-                              prediction_along(scenario, config, predicted, dt, point));
+                              prediction_along(scenario, config, predicted, dt, point),
+                              aimed_at != nullptr ? *aimed_at : paper_gap(scenario));
+}
+
+}  // namespace
+
+LaneChangeQp first_round_problem(const Scenario& scenario, const Config& config) {
+  return first_round_problem(scenario, config, nullptr);
+}
+
+LaneChangeQp first_round_problem(const Scenario& scenario, const Config& config, const Gap& gap) {
+  return first_round_problem(scenario, config, &gap);
 }
 
 CrossCheckCase compare_with_reference(const LaneChangeSolution& f, const StoredReference& r,

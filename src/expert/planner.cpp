@@ -547,6 +547,7 @@ Trajectory ExpertPlanner::to_trajectory(const ExpertResult& result,
   t.planner = "miqp";
   t.dt = scenario.horizon / steps;
   t.lane_width = scenario.lane_width;
+  t.target_side = scenario.target_side;
   EgoState state = scenario.ego;
   double defect = 0.0;
   for (int k = 0; k <= steps; ++k) {

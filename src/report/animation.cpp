@@ -149,20 +149,23 @@ std::string trajectory_animation_svg(const Trajectory& tr, const AnimationOption
   x_hi += o.view_length;
   // The camera keeps the ego a third of the way into the view.
   auto camera = [&](int k) { return tr.ego[static_cast<std::size_t>(k)].x - o.view_length / 3; };
-  const double y_top = w * 0.5 + view_height / 2;  // the view is centred on the lane line
+  // The view is centred on the lane line, in metres with y up; a right-hand
+  // change, held as its mirror image, is drawn unflipped, so its target lane
+  // lies below.
+  const bool flip = tr.target_side == Side::Left;
+  const double y_top = flip ? -(w * 0.5 + view_height / 2) : w * 0.5 - view_height / 2;
   std::ostringstream out;
   out << "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" << o.width_px << "\" height=\""
-      << height_px << "\" viewBox=\"" << num(camera(0)) << ' ' << num(-y_top) << ' '
+      << height_px << "\" viewBox=\"" << num(camera(0)) << ' ' << num(y_top) << ' '
       << num(o.view_length) << ' ' << num(view_height) << "\">\n";
   out << "<animate attributeName=\"viewBox\" values=\""
       << values(n,
                 [&](int k) {
-                  return num(camera(k)) + " " + num(-y_top) + " " + num(o.view_length) + " " +
+                  return num(camera(k)) + " " + num(y_top) + " " + num(o.view_length) + " " +
                          num(view_height);
                 })
       << "\" dur=\"" << dur << "\" calcMode=\"linear\" repeatCount=\"indefinite\"/>\n";
-  // Metres with y up: flip the scene once.
-  out << "<g transform=\"scale(1,-1)\">\n";
+  out << "<g transform=\"scale(1," << (flip ? "-1" : "1") << ")\">\n";
   draw_road(out, tr, x_lo, x_hi);
   draw_path_and_events(out, tr);
   for (std::size_t c = 0; c < tr.cars.size(); ++c) {
@@ -206,10 +209,10 @@ std::string trajectory_animation_svg(const Trajectory& tr, const AnimationOption
   out << "<g>"
       << animate_transform("translate", values(n, [&](int k) { return num(camera(k)) + ",0"; }),
                            dur)
-      << "<text x=\"1\" y=\"" << num(-y_top + view_height * 0.09) << "\" font-size=\""
+      << "<text x=\"1\" y=\"" << num(y_top + view_height * 0.09) << "\" font-size=\""
       << num(view_height * 0.06) << "\" font-family=\"sans-serif\">" << xml_escaped(title)
       << " (t = " << num(tr.t.front()) << " to " << num(tr.t.back()) << " s)</text>"
-      << "<rect x=\"1\" y=\"" << num(-y_top + view_height * 0.92) << "\" height=\""
+      << "<rect x=\"1\" y=\"" << num(y_top + view_height * 0.92) << "\" height=\""
       << num(view_height * 0.03) << "\" width=\"0\" fill=\"#555\"><animate attributeName=\"width\" "
       << "values=\"0;" << num(o.view_length - 2) << "\" dur=\"" << dur
       << "\" repeatCount=\"indefinite\"/></rect></g>\n";

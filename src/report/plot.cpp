@@ -276,6 +276,20 @@ Range y_range(const Trajectory& tr, const VehicleSize& size) {
   return r;
 }
 
+// A right-hand change is held as its mirror image: its axis runs the other
+// way, labelled with the file's y, so the target lane is drawn below.
+std::string y_axis(const Range& y, double tic, Side side) {
+  if (side == Side::Left) {
+    return "set yrange [" + num(y.lo) + ":" + num(y.hi) + "]\nset ytics " + num(tic) + "\n";
+  }
+  std::string tics;
+  for (auto i = static_cast<long>(std::ceil(y.lo / tic)); i * tic <= y.hi; ++i) {
+    const double at = static_cast<double>(i) * tic;
+    tics += (tics.empty() ? "" : ", ") + gnuplot_string(num(i == 0 ? 0.0 : -at)) + " " + num(at);
+  }
+  return "set yrange [" + num(y.hi) + ":" + num(y.lo) + "]\nset ytics (" + tics + ")\n";
+}
+
 void write_header(std::ostream& out, const Trajectory& tr, const std::string& png_path,
                   const PlotOptions& options, const std::vector<Snapshot>& snaps) {
   std::string instants;
@@ -291,8 +305,7 @@ void write_header(std::ostream& out, const Trajectory& tr, const std::string& pn
       << gnuplot_string("x [m]    (cars at t = " + instants + " s; darker = later)") << "\n"
       << "set ylabel 'y [m]'\n"
       << "set xrange [" << num(x.lo) << ":" << num(x.hi) << "]\n"
-      << "set yrange [" << num(y.lo) << ":" << num(y.hi) << "]\n"
-      << "set ytics " << num(tr.lane_width / 2.0) << "\n"
+      << y_axis(y, tr.lane_width / 2.0, tr.target_side)
       << "set key outside bottom center horizontal\n"
       << "set tics out nomirror\n";
 }

@@ -31,6 +31,8 @@ Behavior behavior_from_string(std::string_view name, const std::string& field) {
 
 std::string_view to_string(Lane lane) { return lane == Lane::Ego ? "ego" : "target"; }
 
+std::string_view to_string(Side side) { return side == Side::Left ? "left" : "right"; }
+
 std::string_view to_string(Role role) {
   switch (role) {
     case Role::Leader: return "leader";
@@ -259,7 +261,7 @@ std::string car_path(std::size_t i) {
 // The shape format 1 holds: the paper's three cars, in Role order, of the
 // scene's behavior.
 bool has_three_car_shape(const Scenario& s) {
-  if (s.cars.size() != 3) return false;
+  if (s.cars.size() != 3 || s.target_side != Side::Left) return false;
   for (const Role role : kRoles) {
     const auto i = static_cast<std::size_t>(role);
     const OtherCar& car = s.cars[i];
@@ -337,7 +339,8 @@ void validate_named(const Scenario& s, const CarNames& car_field) {
   require(std::abs(s.ego.theta) < std::numbers::pi / 2, "ego.theta",
           "must point forward (|theta| < pi/2)");
   require(s.ego.y >= -0.5 * s.lane_width && s.ego.y <= 1.5 * s.lane_width, "ego.y",
-          "must lie on the two-lane road [-w/2, 3w/2]");
+          s.target_side == Side::Left ? "must lie on the two-lane road [-w/2, 3w/2]"
+                                      : "must lie on the two-lane road [-3w/2, w/2]");
   validate_roles(s, car_field);
   validate_no_overlap(s, car_field);
 }
@@ -409,10 +412,17 @@ void read_road(const json& root, Scenario& s) {
   reject_unknown_keys(road, "road", {"lane_width", "target_lane"});
   s.lane_width = read_number(road, "road", "lane_width", true, 0.0);
   if (auto it = road.find("target_lane"); it != road.end()) {
-    require(it->is_string() && *it == "left", "road.target_lane",
-            "must be \"left\": the target lane is to the ego lane's left (a right-hand "
-            "change is the mirror image: negate y and theta)");
+    require(it->is_string() && (*it == "left" || *it == "right"), "road.target_lane",
+            "must be \"left\" or \"right\"");
+    s.target_side = *it == "right" ? Side::Right : Side::Left;
   }
+}
+
+// The ego as every stage sees it: a right-hand change is planned as its
+// mirror image. Its own inverse.
+void mirror_ego(Scenario& s) {
+  s.ego.y *= mirror_sign(s.target_side);
+  s.ego.theta *= mirror_sign(s.target_side);
 }
 
 // Each car's role as the file names it; where no car names one, every role
@@ -482,6 +492,7 @@ Scenario scenario_from_json(const json& root, const Config& defaults) {
   }
   s.behavior = read_behavior(root, "", "behavior");
   s.ego = read_ego(root);
+  mirror_ego(s);
   if (format_1) {
     read_format_1_cars(root, s);
   } else {
@@ -534,11 +545,15 @@ json scenario_to_json(const Scenario& s) {
   if (format_1) {
     out["lane_width"] = s.lane_width;
   } else {
-    out["road"] = {{"lane_width", s.lane_width}, {"target_lane", "left"}};
+    out["road"] = {{"lane_width", s.lane_width}, {"target_lane", to_string(s.target_side)}};
   }
   out["behavior"] = to_string(s.behavior);
-  out["ego"] = {
-      {"x", s.ego.x}, {"y", s.ego.y}, {"v", s.ego.v}, {"theta", s.ego.theta}, {"a", s.ego.a}};
+  const double sign = mirror_sign(s.target_side);
+  out["ego"] = {{"x", s.ego.x},
+                {"y", sign * s.ego.y},
+                {"v", s.ego.v},
+                {"theta", sign * s.ego.theta},
+                {"a", s.ego.a}};
   if (format_1) {
     for (CarIndex i = 0; i < 3; ++i) out[s.cars[i].id] = car_to_json(s, i, true);
   } else {

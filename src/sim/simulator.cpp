@@ -29,6 +29,7 @@ class Loop {
     dt_ = scene.horizon / scene.steps;
     path_.dt = dt_;
     path_.lane_width = scene.lane_width;
+    path_.target_side = scene.target_side;
     path_.others.dt = dt_;
     path_.others.cars.resize(scene.car_count());
     path_.cars = tracked_cars(scene);

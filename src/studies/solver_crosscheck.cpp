@@ -44,6 +44,8 @@ struct Case {
   std::optional<json> scenario;
   std::optional<Config> config;
   std::optional<expert::StoredReference> reference;
+  /// Of the scene's target_lane_gaps(best), from the back; none: Eq. 1's gap.
+  std::optional<std::size_t> gap;
 };
 
 Case parse_stored_case(const std::string& line, long long line_number, std::uint64_t seed,
@@ -63,6 +65,7 @@ Case parse_stored_case(const std::string& line, long long line_number, std::uint
     c.index = row.at("index").get<std::uint64_t>();
     c.seed = row.value("seed", seed);
     c.steps = row.value("steps", steps);
+    if (row.contains("gap")) c.gap = row.at("gap").get<std::size_t>();
     expert::StoredReference reference;
     reference.status = expert::parse_miqp_status(row.at("reference_status").get<std::string>());
     const auto& objective = row.at("reference_objective");
@@ -80,13 +83,39 @@ class Checker {
  public:
   explicit Checker(const CrossCheckOptions& options) : o_(options) {}
 
+  // A sampled scene: its one case, or one per gap.
+  void run_sampled(std::uint64_t index) {
+    const Case sampled{index, o_.seed, o_.steps, {}, {}, {}, {}};
+    if (!o_.every_gap) {
+      run(sampled);
+      return;
+    }
+    const Scenario scenario = ScenarioSampler(config_of(sampled), o_.seed).sample(index);
+    const auto gaps = expert::target_lane_gaps(scenario, GapChoice::Best);
+    for (std::size_t g = 0; g < gaps.size(); ++g) {
+      Case one = sampled;
+      one.gap = g;
+      run(one);
+    }
+  }
+
   void run(const Case& stored) {
-    Config config = stored.config ? *stored.config : o_.config;
-    if (stored.steps > 0) config.expert.steps = stored.steps;
+    const Config config = config_of(stored);
     const Scenario scenario = stored.scenario
                                   ? scenario_from_json(*stored.scenario, config)
                                   : ScenarioSampler(config, stored.seed).sample(stored.index);
-    const auto qp = expert::first_round_problem(scenario, config);
+    std::optional<expert::Gap> gap;
+    if (stored.gap) {
+      const auto gaps = expert::target_lane_gaps(scenario, GapChoice::Best);
+      if (*stored.gap >= gaps.size()) {
+        throw InputError("gap", "case " + std::to_string(stored.index) + " names gap " +
+                                    std::to_string(*stored.gap) + " of a scene with " +
+                                    std::to_string(gaps.size()));
+      }
+      gap = gaps[*stored.gap];
+    }
+    const auto qp = gap ? expert::first_round_problem(scenario, config, *gap)
+                        : expert::first_round_problem(scenario, config);
     expert::CrossCheckCase c;
     if (stored.reference) {
       c = expert::compare_with_reference(fast_.solve(qp, {}), *stored.reference, o_.tolerance);
@@ -102,6 +131,10 @@ class Checker {
     report_.total += decided || !stored.reference ? 1 : 0;
     report_.agreed += c.agree ? 1 : 0;
     json row = case_row(c, stored.seed, stored.steps);
+    if (gap) {
+      row["gap"] = *stored.gap;
+      row["gap_cars"] = expert::describe(scenario, *gap);
+    }
     row["scenario"] = scenario_to_json(scenario);
     row["config"] = config;
     if (o_.cases != nullptr) *o_.cases << row.dump() << std::endl;
@@ -111,6 +144,12 @@ class Checker {
   [[nodiscard]] CrossCheckReport report() const { return report_; }
 
  private:
+  [[nodiscard]] Config config_of(const Case& c) const {
+    Config config = c.config ? *c.config : o_.config;
+    if (c.steps > 0) config.expert.steps = c.steps;
+    return config;
+  }
+
   const CrossCheckOptions& o_;
   const expert::FastLaneChangeSolver fast_;
   CrossCheckReport report_;
@@ -132,7 +171,7 @@ CrossCheckReport run_crosscheck(const CrossCheckOptions& o) {
     return checker.report();
   }
   for (long long i = o.first; i < o.first + o.count; ++i) {
-    checker.run({static_cast<std::uint64_t>(i), o.seed, o.steps, {}, {}, {}});
+    checker.run_sampled(static_cast<std::uint64_t>(i));
   }
   return checker.report();
 }

@@ -30,6 +30,7 @@ Trajectory failed_trajectory(std::string planner, const Scenario& scenario, std:
   t.reason = std::move(reason);
   t.dt = scenario.horizon / scenario.steps;
   t.lane_width = scenario.lane_width;
+  t.target_side = scenario.target_side;
   t.t = {0.0};
   t.ego = {scenario.ego};
   t.controls = {EgoControl{}};
@@ -87,16 +88,18 @@ json trajectory_to_json(const Trajectory& tr) {
   if (!tr.reason.empty()) out["reason"] = tr.reason;
   out["dt"] = tr.dt;
   out["lane_width"] = tr.lane_width;
+  out["target_lane"] = to_string(tr.target_side);
   out["t"] = tr.t;
+  const double sign = mirror_sign(tr.target_side);
   std::vector<double> a, omega;
   for (const auto& u : tr.controls) {
     a.push_back(u.a);
-    omega.push_back(u.omega);
+    omega.push_back(sign * u.omega);
   }
   out["ego"] = {{"x", column(tr.ego, [](const EgoState& s) { return s.x; })},
-                {"y", column(tr.ego, [](const EgoState& s) { return s.y; })},
+                {"y", column(tr.ego, [&](const EgoState& s) { return sign * s.y; })},
                 {"v", column(tr.ego, [](const EgoState& s) { return s.v; })},
-                {"theta", column(tr.ego, [](const EgoState& s) { return s.theta; })},
+                {"theta", column(tr.ego, [&](const EgoState& s) { return sign * s.theta; })},
                 {"a", a},
                 {"omega", omega}};
   json others = json::array();
@@ -184,8 +187,8 @@ Trajectory trajectory_from_json(const json& in) {
                                    std::string(kTrajectoryFormatThreeCars) + "\"");
   }
   tr.details = in;
-  for (const char* k : {"format", "planner", "label", "reason", "dt", "lane_width", "t", "ego",
-                        "others", "collision", "compute_ms"}) {
+  for (const char* k : {"format", "planner", "label", "reason", "dt", "lane_width", "target_lane",
+                        "t", "ego", "others", "collision", "compute_ms"}) {
     tr.details.erase(k);
   }
   detail::read_value(in.value("planner", json("")), "planner", tr.planner);
@@ -196,6 +199,14 @@ Trajectory trajectory_from_json(const json& in) {
   detail::read_value(in.value("dt", json()), "dt", tr.dt);
   tr.lane_width = 3.75;
   if (in.contains("lane_width")) detail::read_value(in["lane_width"], "lane_width", tr.lane_width);
+  if (in.contains("target_lane")) {
+    const json& side = in["target_lane"];
+    if (!side.is_string() || (side != "left" && side != "right")) {
+      throw InputError("target_lane", "must be \"left\" or \"right\"");
+    }
+    tr.target_side = side == "right" ? Side::Right : Side::Left;
+  }
+  const double sign = mirror_sign(tr.target_side);
   if (!in.contains("t") || !in["t"].is_array()) throw InputError("t", "must be an array");
   const std::size_t n = in["t"].size();
   tr.t = read_array(in, "", "t", n);
@@ -204,8 +215,8 @@ Trajectory trajectory_from_json(const json& in) {
              v = read_array(ego, "ego", "v", n), th = read_array(ego, "ego", "theta", n),
              a = read_array(ego, "ego", "a", n), w = read_array(ego, "ego", "omega", n);
   for (std::size_t k = 0; k < n; ++k) {
-    tr.ego.push_back({x[k], y[k], v[k], th[k], a[k]});
-    tr.controls.push_back({a[k], w[k]});
+    tr.ego.push_back({x[k], sign * y[k], v[k], sign * th[k], a[k]});
+    tr.controls.push_back({a[k], sign * w[k]});
   }
   read_others(in, three_cars, n, tr);
   if (in.contains("collision")) detail::read_value(in["collision"], "collision", tr.collision);

@@ -354,6 +354,39 @@ TEST(CrossCheckReplayCli, UsesTheConfigStoredWithEachCase) {
   EXPECT_EQ(testing::run_cli("crosscheck --replay " + cases).exit_code, 0);
 }
 
+// With --every-gap each dense scene gives one case per gap of its target
+// lane, named by its framing cars; a replay rebuilds that gap's problem, and
+// a gap the scene does not have is refused with exit code 2.
+TEST(CrossCheckReplayCli, EveryGapGivesACasePerGapAndItsReplayRebuildsIt) {
+  testing::TempDir dir;
+  const std::string cases = dir.file("cases.jsonl");
+  testing::write_text(dir.file("dense.json"),
+                      R"({"expert": {"lane_rule": "either_or"},
+                          "sampler": {"target_lane_cars": [3, 3]}})");
+  const auto made =
+      testing::run_cli("--config " + dir.file("dense.json") +
+                       " crosscheck --every-gap --count 1 --seed 5 --steps 6 --out " + cases);
+  ASSERT_EQ(made.exit_code, 0) << made.output;
+  std::vector<nlohmann::json> rows;
+  std::ifstream in(cases);
+  for (std::string line; std::getline(in, line);) rows.push_back(nlohmann::json::parse(line));
+  ASSERT_EQ(rows.size(), 4U);  // behind, between and ahead of three cars
+  for (std::size_t g = 0; g < rows.size(); ++g) {
+    EXPECT_EQ(rows[g]["gap"], g);
+    EXPECT_EQ(rows[g]["scenario"]["cars"].size(), 5U);
+  }
+  EXPECT_EQ(rows[0]["gap_cars"].get<std::string>().rfind("none-", 0), 0U);
+  EXPECT_NE(rows[1]["gap_cars"], rows[2]["gap_cars"]);
+  const auto replay = testing::run_cli("crosscheck --replay " + cases);
+  EXPECT_EQ(replay.exit_code, 0) << replay.output;
+  EXPECT_NE(replay.output.find("4 of 4 agree"), std::string::npos) << replay.output;
+  rows[0]["gap"] = 9;
+  testing::write_text(dir.file("bad.jsonl"), rows[0].dump() + "\n");
+  const auto bad = testing::run_cli("crosscheck --replay " + dir.file("bad.jsonl"));
+  EXPECT_EQ(bad.exit_code, 2) << bad.output;
+  EXPECT_NE(bad.output.find("gap"), std::string::npos) << bad.output;
+}
+
 INSTANTIATE_TEST_SUITE_P(SampledScenarios, CrossCheck,
                          ::testing::Combine(::testing::Values(LaneRule::EitherOr,
                                                               LaneRule::Footprint,

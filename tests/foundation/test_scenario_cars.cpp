@@ -76,6 +76,29 @@ TEST(ScenarioCars, ACarMayCarryItsOwnBehavior) {
   expect_rejected(j, "cars[0].a", "missing");
 }
 
+// A change into the lane to the right is held as its mirror image: the
+// ego's y and heading are negated when read and again when written, and the
+// cars, which name their lanes, stay as they are.
+TEST(ScenarioCars, ARightHandChangeIsHeldAsItsMirrorImage) {
+  json left = example_cars_json();
+  left["ego"]["y"] = 0.4;
+  left["ego"]["theta"] = 0.05;
+  json right = left;
+  right["road"]["target_lane"] = "right";
+  right["ego"]["y"] = -0.4;
+  right["ego"]["theta"] = -0.05;
+  const Scenario l = scenario_from_json(left, Config{});
+  const Scenario r = scenario_from_json(right, Config{});
+  EXPECT_EQ(r.target_side, Side::Right);
+  EXPECT_DOUBLE_EQ(r.ego.y, l.ego.y);
+  EXPECT_DOUBLE_EQ(r.ego.theta, l.ego.theta);
+  const json written = scenario_to_json(r);
+  EXPECT_EQ(written["format"], "lanechange.scenario/2");
+  EXPECT_EQ(written["road"]["target_lane"], "right");
+  EXPECT_DOUBLE_EQ(written["ego"]["y"].get<double>(), -0.4);
+  EXPECT_EQ(scenario_to_json(scenario_from_json(written, Config{})), written);
+}
+
 TEST(ScenarioCarsBadInput, EachProblemNamesItsField) {
   json unknown = example_cars_json();
   unknown["cars"][1]["colour"] = "red";
@@ -99,9 +122,13 @@ TEST(ScenarioCarsBadInput, EachProblemNamesItsField) {
   json negative = example_cars_json();
   negative["cars"][1]["v"] = -1.0;
   expect_rejected(negative, "cars[1].v", "negative");
-  json right = example_cars_json();
-  right["road"]["target_lane"] = "right";
-  expect_rejected(right, "road.target_lane", "left");
+  json side = example_cars_json();
+  side["road"]["target_lane"] = "up";
+  expect_rejected(side, "road.target_lane", "right");
+  json off_road = example_cars_json();
+  off_road["road"]["target_lane"] = "right";
+  off_road["ego"]["y"] = 2.0;  // beyond the right-hand road's left edge, w/2
+  expect_rejected(off_road, "ego.y", "[-3w/2, w/2]");
   json mixed = example_cars_json();
   mixed["leader"] = {{"x", 1.0}, {"v", 1.0}};
   expect_rejected(mixed, "leader", "unknown");

@@ -220,6 +220,23 @@ TEST(PlotScript, PathAndRangesCoverTheWholeTrajectory) {
   EXPECT_LT(hi - lo, 100.0);
 }
 
+// A right-hand change, held as its mirror image, is drawn with its target
+// lane below: the y axis runs down, labelled with the file's y; the
+// animation leaves its scene unflipped.
+TEST(PlotScript, ARightHandChangeIsDrawnWithItsTargetLaneBelow) {
+  Trajectory tr = lane_change();
+  tr.target_side = Side::Right;
+  const std::string script = trajectory_plot_script(tr, "out.png");
+  EXPECT_NE(script.find("set yrange [7:-3.5]"), std::string::npos) << script;
+  EXPECT_NE(script.find("'-3.5' 3.5, '-5.25' 5.25"), std::string::npos)
+      << line_with(script, "set ytics");
+  EXPECT_NE(script.find("'0' 0,"), std::string::npos) << line_with(script, "set ytics");
+  EXPECT_EQ(trajectory_animation_svg(lane_change(11)).find("scale(1,1)"), std::string::npos);
+  Trajectory short_right = lane_change(11);
+  short_right.target_side = Side::Right;
+  EXPECT_NE(trajectory_animation_svg(short_right).find("scale(1,1)"), std::string::npos);
+}
+
 TEST(PlotScript, SingleNodeTrajectoryDrawsOneSnapshot) {
   EXPECT_EQ(count(trajectory_plot_script(lane_change(1), "out.png"), " polygon "), 4);
 }

@@ -11,6 +11,7 @@
 #include "lanechange/sampler.hpp"
 #include "lanechange/sim/simulator.hpp"
 #include "lanechange/traffic.hpp"
+#include "lanechange/trajectory.hpp"
 #include "rollout_checks.hpp"
 #include "test_helpers.hpp"
 
@@ -252,6 +253,29 @@ TEST(ClosedLoop, SimulateCliWritesARolloutAndRefusesBadInput) {
   EXPECT_EQ(
       testing::run_cli("simulate --planner nobody --scenario " + dir.file("s.json")).exit_code, 2);
   EXPECT_EQ(testing::run_cli("simulate --scenario " + dir.file("absent.json")).exit_code, 2);
+}
+
+// A scene whose target lane is to the right is planned as its mirror image
+// and written back in its own frame: the ego ends in the lane to its right,
+// the plot draws that lane below, and the rollout reads back as it was held.
+TEST(ClosedLoop, ARightHandChangeEndsInTheLaneToTheRight) {
+  testing::TempDir dir;
+  nlohmann::json scene = testing::example_cars_json();
+  scene["road"]["target_lane"] = "right";
+  testing::write_text(dir.file("s.json"), scene.dump());
+  const auto r =
+      testing::run_cli("--config " + testing::untimed_config_file(dir) + " simulate --scenario " +
+                       dir.file("s.json") + " --out " + dir.file("r.json"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const auto rollout = nlohmann::json::parse(testing::read_text(dir.file("r.json")));
+  EXPECT_EQ(rollout["outcome"], "well_posed") << rollout["reason"];
+  EXPECT_EQ(rollout["target_lane"], "right");
+  const double lane_width = scene["road"]["lane_width"].get<double>();
+  EXPECT_NEAR(rollout["ego"]["y"].back().get<double>(), -lane_width, 0.3);
+  const Trajectory held = trajectory_from_json(rollout);
+  EXPECT_EQ(held.target_side, Side::Right);
+  EXPECT_NEAR(held.ego.back().y, lane_width, 0.3);
+  EXPECT_EQ(trajectory_to_json(held)["ego"], rollout["ego"]);
 }
 
 }  // namespace

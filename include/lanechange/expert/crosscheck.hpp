@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "lanechange/config.hpp"
+#include "lanechange/expert/formulation.hpp"
 #include "lanechange/expert/lane_change_solver.hpp"
 #include "lanechange/scenario.hpp"
 
@@ -27,8 +28,13 @@ struct CrossCheckCase {
   bool agree = false;  ///< same verdict and, if solved, objectives within the tolerance
 };
 
-/// The first round's MIQP of a scenario (warm start, prediction along it).
+/// The first round's MIQP of a scenario (warm start, prediction along it),
+/// through Eq. 1's gap.
 [[nodiscard]] LaneChangeQp first_round_problem(const Scenario& scenario, const Config& config);
+/// The same through `gap`, from the warm start aimed into it, as a plan's
+/// first round solves each gap.
+[[nodiscard]] LaneChangeQp first_round_problem(const Scenario& scenario, const Config& config,
+                                               const Gap& gap);
 
 /// The verdict of a stored reference solve (a line of an earlier cross-check).
 struct StoredReference {

@@ -1,6 +1,7 @@
 #pragma once
 // `lanechange crosscheck`: our fast MIQP solver against the reference
-// (Bonmin B-BB) on the first-round MIQPs of sampled scenes, or a replay of
+// (Bonmin B-BB) on the first-round MIQPs of sampled scenes (Eq. 1's gap, or
+// every gap of the target lane), or a replay of
 // stored reference verdicts (docs/expert_results.md). Each case is written
 // with its scene and config, so that a replay depends on neither the sampler
 // nor today's defaults.
@@ -17,7 +18,10 @@ struct CrossCheckOptions {
   long long count = 20;
   long long first = 0;  ///< index of the first sampled scene
   std::uint64_t seed = 1;
-  int steps = 0;                     ///< N for every case; 0: the config's
+  int steps = 0;  ///< N for every case; 0: the config's
+  /// One case per gap of each sampled scene's target lane (each from the warm
+  /// start aimed into it, as a plan's first round solves it); false: Eq. 1's gap.
+  bool every_gap = false;
   double tolerance = 1e-6;           ///< largest relative objective difference
   std::string replay_path;           ///< an earlier output: re-solve only the fast side
   std::ostream* cases = nullptr;     ///< one JSON line per case (the --out file)
