@@ -283,7 +283,8 @@ std::string y_axis(const Range& y, double tic, Side side) {
     return "set yrange [" + num(y.lo) + ":" + num(y.hi) + "]\nset ytics " + num(tic) + "\n";
   }
   std::string tics;
-  for (auto i = static_cast<long>(std::ceil(y.lo / tic)); i * tic <= y.hi; ++i) {
+  for (auto i = static_cast<long>(std::ceil(y.lo / tic)); static_cast<double>(i) * tic <= y.hi;
+       ++i) {
     const double at = static_cast<double>(i) * tic;
     tics += (tics.empty() ? "" : ", ") + gnuplot_string(num(i == 0 ? 0.0 : -at)) + " " + num(at);
   }
