@@ -111,6 +111,22 @@ std::string target_lane_slot(const Trajectory& t, const Scenario& scene) {
 
 namespace detail {
 
+std::optional<nlohmann::json> gap_taken(const Trajectory& t, const Scenario& scene) {
+  const EgoState& e = t.ego.back();
+  if (std::abs(e.y - scene.lane_width) > scene.lane_width / 2.0) return std::nullopt;
+  const auto last = static_cast<std::size_t>(t.nodes() - 1);
+  std::vector<CarState> now;
+  now.reserve(t.others.car_count());
+  for (CarIndex c = 0; c < t.others.car_count(); ++c) {
+    now.push_back({t.others.car(c).x[last], t.others.car(c).v[last], 0.0});
+  }
+  const auto id_of = [&](bool ahead) {
+    const auto c = nearest_in_lane(scene, now, Lane::Target, e.x, ahead);
+    return c ? nlohmann::json(scene.cars[*c].id) : nlohmann::json();
+  };
+  return nlohmann::json{{"behind", id_of(false)}, {"ahead", id_of(true)}};
+}
+
 RolloutMetrics measure(const Rollout& rollout, const Scenario& scene, const Config& config) {
   RolloutMetrics m;
   const Trajectory& t = rollout.trajectory;

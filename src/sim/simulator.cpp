@@ -197,6 +197,7 @@ Rollout simulate(const Scenario& scene, const planner::ClosedLoopPlanner& planne
             : out.outcome == Outcome::IllPosed ? Label::IllPosed
                                                : Label::Failure;
   t.reason = out.reason;
+  if (const auto gap = detail::gap_taken(t, scene)) t.details["gap"] = *gap;
   out.metrics = detail::measure(out, scene, config);
   t.compute_total_ms = 0.0;
   for (const StepRecord& s : out.steps) t.compute_total_ms += s.compute_ms;

@@ -54,6 +54,9 @@ TEST(ManyCars, TheExpertChangesLanesIntoTheOnlyOpenGapOfADenseLane) {
   const auto& t3 = r.trajectory.others.car(*s.find("t3")).x.back();
   EXPECT_GT(end.x, t2);
   EXPECT_LT(end.x, t3);
+  // The rollout names the gap it ended in, for the plots.
+  EXPECT_EQ(r.trajectory.details["gap"]["behind"], "t2");
+  EXPECT_EQ(r.trajectory.details["gap"]["ahead"], "t3");
 }
 
 }  // namespace
