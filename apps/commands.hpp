@@ -29,6 +29,13 @@ void add_behavior_option(CLI::App& cmd, std::string& behavior);
 /// "all" is none; any other name must be a behavior (InputError naming --behavior).
 [[nodiscard]] std::optional<Behavior> behavior_option(const std::string& behavior);
 
+/// --target-lane-cars N or LO,HI: dense traffic (sampler.target_lane_cars)
+/// for the commands that draw scenes; empty keeps the config's.
+void add_traffic_option(CLI::App& cmd, std::string& target_lane_cars);
+/// `config` with the option's count range; InputError naming
+/// --target-lane-cars for anything but one or two whole counts in [0, 100].
+[[nodiscard]] Config with_target_lane_cars(Config config, const std::string& option);
+
 /// --planner NAME[,NAME...]: the planners one command runs, by registry name.
 void add_planner_option(CLI::App& cmd, std::string& planners, const std::string& what);
 /// "a,b,,c" -> {a, b, c}: an empty name (a doubled or trailing comma) is

@@ -16,6 +16,7 @@ struct GenerateArgs {
   long long count = 0;
   std::uint64_t seed = 0;
   std::string behavior;
+  std::string target_lane_cars;
   std::string out_dir;
   int jobs = 0;
   std::string solver = "fast";
@@ -75,6 +76,7 @@ void add_generate(CLI::App& app, const ConfigSource& config) {
   cmd->add_option("--out", a->out_dir, "Data set directory (created; resumed if it exists)")
       ->required();
   add_behavior_option(*cmd, a->behavior);
+  add_traffic_option(*cmd, a->target_lane_cars);
   cmd->add_option("--jobs", a->jobs, "Worker threads per process (default: all cores)")
       ->check(CLI::Range(0, 1024));
   cmd->add_option("--solver", a->solver, "MIQP back-end: fast (ours) or reference (Bonmin)");
@@ -82,7 +84,9 @@ void add_generate(CLI::App& app, const ConfigSource& config) {
       ->check(CLI::Range(2, 10000));
   cmd->add_option("--shard-size", a->shard_size, "Scenarios per shard file");
   cmd->add_option("--time-limit", a->time_limit, "Seconds per plan");
-  cmd->callback([a, config] { run_generate(*a, config); });
+  cmd->callback([a, config] {
+    run_generate(*a, [&] { return with_target_lane_cars(config(), a->target_lane_cars); });
+  });
 }
 
 void add_dataset_info(CLI::App& app) {

@@ -19,6 +19,7 @@ struct SampleArgs {
   std::uint64_t seed = 0;
   std::string out_dir;
   std::string behavior;
+  std::string target_lane_cars;
 };
 
 struct PlanArgs {
@@ -105,7 +106,9 @@ void add_sample(CLI::App& app, const ConfigSource& config) {
   cmd->add_option("--seed", a->seed, "Sampler seed")->required();
   cmd->add_option("--out", a->out_dir, "Output directory (created if missing)")->required();
   add_behavior_option(*cmd, a->behavior);
-  cmd->callback([a, config] { write_samples(*a, config()); });
+  add_traffic_option(*cmd, a->target_lane_cars);
+  cmd->callback(
+      [a, config] { write_samples(*a, with_target_lane_cars(config(), a->target_lane_cars)); });
 }
 
 void add_config(CLI::App& app, const ConfigSource& config) {

@@ -27,6 +27,7 @@ struct SimulateArgs {
 struct EvaluateArgs {
   sim::EvaluateOptions options;
   std::string behavior;
+  std::string target_lane_cars;
   std::string planners = "miqp";
   int jobs = 0;
 };
@@ -96,6 +97,7 @@ void add_evaluate(CLI::App& app, const ConfigSource& config) {
                                  "sampled scenes (scenes.csv names each index's file)");
   scenes->excludes(count)->excludes(seed);
   add_behavior_option(*cmd, a->behavior);
+  add_traffic_option(*cmd, a->target_lane_cars);
   add_planner_option(*cmd, a->planners, "Planners, comma-separated");
   cmd->add_option("--model", o.model_dir,
                   "Model directory (lanechange train), for mlp-miqp and strategy-qp");
@@ -108,7 +110,7 @@ void add_evaluate(CLI::App& app, const ConfigSource& config) {
     if (scenes->count() == 0 && (count->count() == 0 || seed->count() == 0)) {
       throw InputError("--count", "evaluate needs --count N and --seed S, or --scenarios DIR");
     }
-    evaluate_all(*a, config());
+    evaluate_all(*a, with_target_lane_cars(config(), a->target_lane_cars));
   });
 }
 

@@ -5,6 +5,7 @@
 
 #include "lanechange/error.hpp"
 #include "lanechange/sampler.hpp"
+#include "test_helpers.hpp"
 
 namespace lanechange {
 namespace {
@@ -103,6 +104,31 @@ TEST(Sampler, ACountRangeMustBeWholeNumbers) {
     FAIL() << "accepted a fractional count";
   } catch (const InputError& e) {
     EXPECT_EQ(e.field(), "sampler.target_lane_cars");
+  }
+}
+
+// The commands that draw scenes take the density as an option: sample writes
+// scenes with that many cars in the target lane, and a bad count exits 2
+// naming the option.
+TEST(SamplerCli, TargetLaneCarsDrawsDenseScenesAndRefusesBadCounts) {
+  testing::TempDir dir;
+  const auto r = testing::run_cli("sample --count 3 --seed 4 --target-lane-cars 5,6 --out " +
+                                  dir.file("dense"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  for (const char* name :
+       {"scenario_000000.json", "scenario_000001.json", "scenario_000002.json"}) {
+    const auto scene = nlohmann::json::parse(testing::read_text(dir.file("dense/") + name));
+    int target_lane = 0;
+    for (const auto& car : scene["cars"]) target_lane += car["lane"] == "target" ? 1 : 0;
+    EXPECT_GE(target_lane, 5) << name;
+    EXPECT_LE(target_lane, 6) << name;
+  }
+  for (const char* bad : {"3,x", "2.5", "7,4", "-1"}) {
+    const auto refused =
+        testing::run_cli(std::string("sample --count 1 --seed 4 --target-lane-cars=") + bad +
+                         " --out " + dir.file("bad"));
+    EXPECT_EQ(refused.exit_code, 2) << bad << ": " << refused.output;
+    EXPECT_NE(refused.output.find("--target-lane-cars"), std::string::npos) << refused.output;
   }
 }
 
