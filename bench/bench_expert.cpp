@@ -79,7 +79,7 @@ const std::vector<lc::Scenario>& eight_car_scenarios() {
 
 // The solver comparison runs under the paper's literal either-or rule: under
 // the default footprint rule Bonmin needs minutes per MIQP at N = 50 and
-// decides few within its time limit (docs/expert.md, "Cross-check"), so the
+// decides few within its time limit (docs/crosscheck.md), so the
 // ratio there would be a bound, not a measurement. The footprint optima are
 // checked against Bonmin's by the replayed fixtures instead.
 lc::Config comparison_config() {
