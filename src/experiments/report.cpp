@@ -119,6 +119,14 @@ void table_two(Document& d, int level, const std::string& title,
   if (!verdicts.empty()) d.bullets(verdicts);
 }
 
+// A variant run's Tables II and III, one level down, under `title`.
+void variant_tables(Document& d, const std::string& title, const std::vector<sim::RolloutRow>& rows,
+                    const ReportInputs& in) {
+  table_two(d, 3, title, rows, in);
+  d.heading(3, "Table III (" + title + ")");
+  d.table(behavior_table(rows, in.planners));
+}
+
 void paper_section(Document& d, const ReportInputs& in) {
   d.heading(2, "The paper's own formulation");
   d.paragraph(
@@ -128,9 +136,7 @@ void paper_section(Document& d, const ReportInputs& in) {
       "ignore the ego and each other; `traffic.max_decel = null`: IDM brakes without limit). "
       "This is the reproduction of the paper; the tables above are the defaults. The models "
       "are those trained above.");
-  table_two(d, 3, "the paper's formulation", in.paper, in);
-  d.heading(3, "Table III (the paper's formulation)");
-  d.table(behavior_table(in.paper, in.planners));
+  variant_tables(d, "the paper's formulation", in.paper, in);
 }
 
 void dense_section(Document& d, const ReportInputs& in) {
@@ -144,9 +150,7 @@ void dense_section(Document& d, const ReportInputs& in) {
       "formulation and traffic. The expert chooses among all gaps; mlp-miqp and strategy-qp "
       "read the three cars nearest the ego (docs/scenarios.md, \"Roles\"). " +
       traffic_check(in.dense, in.car_decel_limit) + ".");
-  table_two(d, 3, "dense traffic", in.dense, in);
-  d.heading(3, "Table III (dense traffic)");
-  d.table(behavior_table(in.dense, in.planners));
+  variant_tables(d, "dense traffic", in.dense, in);
 }
 
 void dagger_section(Document& d, const ReportInputs& in) {
@@ -215,9 +219,7 @@ Document build_report(const ReportInputs& in) {
         "The planners that use the expert run again with `expert.lane_rule = either_or`; the "
         "baselines know no lane rule, so their rows repeat the footprint run. The action network "
         "is the one trained on footprint data.");
-    table_two(d, 3, "either_or lane rule", in.either_or, in);
-    d.heading(3, "Table III (either_or lane rule)");
-    d.table(behavior_table(in.either_or, in.planners));
+    variant_tables(d, "either_or lane rule", in.either_or, in);
   }
   paper_section(d, in);
   dense_section(d, in);
