@@ -94,9 +94,14 @@ void car_measures(const Trajectory& t, RolloutMetrics& m) {
 
 // Where a lane change ended against Eq. 1's gap (between the scene's
 // follower and target): in it, ahead of it or behind it.
+// Whether the ego's centre ends in the target lane.
+bool ends_in_target_lane(const Trajectory& t, const Scenario& scene) {
+  return std::abs(t.ego.back().y - scene.lane_width) <= scene.lane_width / 2.0;
+}
+
 std::string target_lane_slot(const Trajectory& t, const Scenario& scene) {
   const EgoState& e = t.ego.back();
-  if (std::abs(e.y - scene.lane_width) > scene.lane_width / 2.0) return "";
+  if (!ends_in_target_lane(t, scene)) return "";
   const auto last = static_cast<std::size_t>(t.nodes() - 1);
   if (scene.has(Role::Target) && t.others.car(scene.index_of(Role::Target)).x[last] < e.x) {
     return "ahead_of_target";
@@ -112,8 +117,8 @@ std::string target_lane_slot(const Trajectory& t, const Scenario& scene) {
 namespace detail {
 
 std::optional<nlohmann::json> gap_taken(const Trajectory& t, const Scenario& scene) {
+  if (!ends_in_target_lane(t, scene)) return std::nullopt;
   const EgoState& e = t.ego.back();
-  if (std::abs(e.y - scene.lane_width) > scene.lane_width / 2.0) return std::nullopt;
   const auto last = static_cast<std::size_t>(t.nodes() - 1);
   std::vector<CarState> now;
   now.reserve(t.others.car_count());
