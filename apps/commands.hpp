@@ -48,6 +48,8 @@ void add_sample(CLI::App& app, const ConfigSource& config);
 void add_config(CLI::App& app, const ConfigSource& config);
 void add_plan(CLI::App& app, const ConfigSource& config);
 void add_plot(CLI::App& app, const ConfigSource& config);
+// Recorded traffic (docs/recorded.md).
+void add_import_commonroad(CLI::App& app, const ConfigSource& config);
 // Expert data (docs/dataset.md).
 void add_generate(CLI::App& app, const ConfigSource& config);
 void add_dataset_info(CLI::App& app);

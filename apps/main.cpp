@@ -32,6 +32,7 @@ void add_commands(CLI::App& app, const GlobalOptions& global) {
   cmd::add_config(app, config);
   cmd::add_plan(app, config);
   cmd::add_plot(app, config);
+  cmd::add_import_commonroad(app, config);
   cmd::add_generate(app, config);
   cmd::add_dataset_info(app);
   cmd::add_train(app);

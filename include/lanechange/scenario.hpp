@@ -73,6 +73,27 @@ struct OtherCar {
   std::optional<VehicleSize> size;
 };
 
+/// The recorded driver's own change into the target lane, in a scene cut
+/// from recorded traffic.
+struct HumanLaneChange {
+  double after = 0.0;  ///< s from the scene's start until its centre entered the target lane
+  /// The ids of the target-lane cars nearest behind and ahead of it then;
+  /// none where that side of the lane was empty.
+  std::optional<std::string> behind;
+  std::optional<std::string> ahead;
+};
+
+/// Where a scene cut from a recording comes from (docs/recorded.md).
+struct SceneOrigin {
+  std::string recording;  ///< the recording's benchmark id
+  double time = 0.0;      ///< the scene's t = 0 in the recording, s
+  std::string ego;        ///< the id of the recorded car or planning problem that is the ego
+  bool ego_is_planning_problem = false;
+  /// A recorded ego's own change into the target lane; none where it stayed
+  /// out of that lane to the recording's end. Always none for a planning problem.
+  std::optional<HumanLaneChange> human_change;
+};
+
 struct Scenario {
   double lane_width = 3.75;
   /// Inside, the target lane is always to the left; a file with the target
@@ -92,6 +113,8 @@ struct Scenario {
   IdmParameters idm;
   SafetyMargins safe_distance;
   Limits limits;
+  /// Set for a scene cut from a recording.
+  std::optional<SceneOrigin> origin;
 
   [[nodiscard]] std::size_t car_count() const { return cars.size(); }
   /// The scene's behavior, given to every car.

@@ -7,6 +7,7 @@
 
 #include "common/config_fields.hpp"
 #include "lanechange/geometry.hpp"
+#include "scenario/origin.hpp"
 
 namespace lanechange {
 
@@ -261,7 +262,7 @@ std::string car_path(std::size_t i) {
 // The shape format 1 holds: the paper's three cars, in Role order, of the
 // scene's behavior.
 bool has_three_car_shape(const Scenario& s) {
-  if (s.cars.size() != 3 || s.target_side != Side::Left) return false;
+  if (s.cars.size() != 3 || s.target_side != Side::Left || s.origin) return false;
   for (const Role role : kRoles) {
     const auto i = static_cast<std::size_t>(role);
     const OtherCar& car = s.cars[i];
@@ -475,7 +476,7 @@ Scenario scenario_from_json(const json& root, const Config& defaults) {
   if (format_1) {
     known.insert(known.end(), {"lane_width", "leader", "follower", "target"});
   } else {
-    known.insert(known.end(), {"road", "cars"});
+    known.insert(known.end(), {"road", "cars", "origin"});
   }
   known.insert(known.end(), kOptionalKeys.begin(), kOptionalKeys.end());
   for (const auto& item : root.items()) {
@@ -497,6 +498,7 @@ Scenario scenario_from_json(const json& root, const Config& defaults) {
     read_format_1_cars(root, s);
   } else {
     read_format_2_cars(root, s);
+    if (auto it = root.find("origin"); it != root.end()) s.origin = detail::read_scene_origin(*it);
   }
   read_optional_fields(root, s);
   read_car_sizes(root, s, format_1);
@@ -568,6 +570,7 @@ json scenario_to_json(const Scenario& s) {
                           {"follower", write_safe_distance(s.safe_distance.follower)},
                           {"target", write_safe_distance(s.safe_distance.target)}};
   out["limits"] = detail::write_value(s.limits);
+  if (s.origin) out["origin"] = detail::write_scene_origin(*s.origin);
   return out;
 }
 
