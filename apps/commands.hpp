@@ -26,7 +26,8 @@ template <class Args>
 
 /// --behavior, with one help text and the default "all" (drawn per scene).
 void add_behavior_option(CLI::App& cmd, std::string& behavior);
-/// "all" is none; any other name must be a behavior (InputError naming --behavior).
+/// "all" is none; any other name must be a behavior the sampler can draw
+/// (InputError naming --behavior; replay needs recorded cars).
 [[nodiscard]] std::optional<Behavior> behavior_option(const std::string& behavior);
 
 /// --target-lane-cars N or LO,HI: dense traffic (sampler.target_lane_cars)

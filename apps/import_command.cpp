@@ -20,7 +20,8 @@ struct ImportArgs {
   double every = 2.0;
   double range = 100.0;
   bool right = false;
-  std::string behavior = "constant_speed";
+  std::string behavior = "replay";
+  bool reactive_behind = false;
 };
 
 // "planning", "recorded", or obstacle ids "12,40".
@@ -48,9 +49,8 @@ void import_files(const ImportArgs& a, const Config& config) {
   settings.every = a.every;
   settings.range = a.range;
   settings.right = a.right;
-  const std::optional<Behavior> behavior = behavior_option(a.behavior);
-  if (!behavior) throw InputError("--behavior", "name one behavior for the imported cars");
-  settings.behavior = *behavior;
+  settings.behavior = behavior_from_string(a.behavior, "--behavior");
+  settings.reactive_behind = a.reactive_behind;
   // Every file is read and cut before anything is written, so a bad file
   // leaves the output folder as it was.
   std::vector<commonroad::ImportReport> reports;
@@ -92,8 +92,11 @@ void add_import_commonroad(CLI::App& app, const ConfigSource& config) {
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
   cmd->add_flag("--right", a->right, "Also cut scenes with the target lane to the right");
-  cmd->add_option("--behavior", a->behavior, "The cars' behavior in the scenes")
+  cmd->add_option("--behavior", a->behavior,
+                  "How the cars move: replay (as recorded), constant_speed, constant_accel or idm")
       ->capture_default_str();
+  cmd->add_flag("--reactive-behind", a->reactive_behind,
+                "Cars behind the ego follow IDM instead, so that they answer a cut-in");
   cmd->callback([a, config] { import_files(*a, config()); });
 }
 

@@ -17,7 +17,11 @@ void add_behavior_option(CLI::App& cmd, std::string& behavior) {
 
 std::optional<Behavior> behavior_option(const std::string& behavior) {
   if (behavior == "all") return std::nullopt;
-  return behavior_from_string(behavior, "--behavior");
+  const Behavior b = behavior_from_string(behavior, "--behavior");
+  if (b == Behavior::Replay) {
+    throw InputError("--behavior", "replay needs recorded cars (lanechange import-commonroad)");
+  }
+  return b;
 }
 
 void add_traffic_option(CLI::App& cmd, std::string& target_lane_cars) {

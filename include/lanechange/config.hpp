@@ -367,6 +367,10 @@ struct StrategyQpSettings {
 };
 
 /// How the other cars treat the car ahead of them (docs/traffic.md).
+/// How another car moves (docs/traffic.md). Replay: exactly as recorded,
+/// ignoring everything (a scene cut from a recording, docs/recorded.md).
+enum class Behavior { ConstantSpeed, ConstantAccel, Idm, Replay };
+
 struct TrafficSettings {
   /// A car of constant speed or acceleration follows the car ahead in its
   /// lane (the ego included once its body is there) where its behavior would
@@ -380,6 +384,9 @@ struct TrafficSettings {
   /// about 8 to 9); where that is not enough, the collision happens and is
   /// judged. None (JSON null): no limit, the paper's IDM.
   std::optional<double> max_decel = 9.0;
+  /// How the planners predict a replayed car: never by its recorded future,
+  /// which no planner may know.
+  Behavior replay_prediction = Behavior::ConstantSpeed;
 };
 
 struct Config {

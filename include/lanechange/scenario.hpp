@@ -19,8 +19,6 @@ namespace lanechange {
 inline constexpr std::string_view kScenarioFormat = "lanechange.scenario/1";
 inline constexpr std::string_view kScenarioFormatCars = "lanechange.scenario/2";
 
-enum class Behavior { ConstantSpeed, ConstantAccel, Idm };
-
 [[nodiscard]] std::string_view to_string(Behavior behavior);
 /// Throws InputError naming `field` for an unknown name.
 [[nodiscard]] Behavior behavior_from_string(std::string_view name,
@@ -62,6 +60,18 @@ inline constexpr Role kRoles[] = {Role::Leader, Role::Follower, Role::Target};
 /// scene (observations, predictions, trajectories).
 using CarIndex = std::size_t;
 
+/// A car's recorded motion along its lane from the scene's start: x and v at
+/// times k * dt. A replayed car moves by it, and past its end on at its last
+/// speed.
+struct RecordedTrack {
+  double dt = 0.1;
+  std::vector<double> x;
+  std::vector<double> v;
+  /// The state at time t >= 0, linearly interpolated between samples; `a` is
+  /// the slope of v there.
+  [[nodiscard]] CarState at(double t) const;
+};
+
 /// Another car: it keeps to its lane and moves by its behavior.
 struct OtherCar {
   std::string id;
@@ -71,6 +81,8 @@ struct OtherCar {
   /// Its own body where the scene gives one (recorded traffic: trucks,
   /// vans); absent, the car has the scene's `vehicle`, as the ego does.
   std::optional<VehicleSize> size;
+  /// A replayed car's record (Behavior::Replay); none for any other car.
+  std::optional<RecordedTrack> record;
 };
 
 /// The recorded driver's own change into the target lane, in a scene cut

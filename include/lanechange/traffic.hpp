@@ -64,15 +64,28 @@ struct SafeGapLine {
                                                              double dt, const IdmParameters& idm,
                                                              const TrafficSettings& traffic);
 
+/// The model a planner predicts a car of `behavior` by: a replayed car's is
+/// traffic.replay_prediction, never its record.
+[[nodiscard]] Behavior predicted_behavior(Behavior behavior, const TrafficSettings& traffic);
+
+/// The scene as a planner may know it: every replayed car by its predicted
+/// behavior, without its record.
+[[nodiscard]] Scenario planning_view(const Scenario& scenario, const TrafficSettings& traffic);
+
 /// Whether any car of the scene reacts to the ego (IDM, or any car under
 /// traffic.followers_react): a prediction then depends on the ego's path.
 [[nodiscard]] bool traffic_reacts(const Scenario& scenario, const Config& config);
 
 class TrafficModel {
  public:
-  TrafficModel(const Scenario& scenario, const Config& config);
+  /// Whether replayed cars move by their records (the simulated world) or
+  /// by traffic.replay_prediction (a planner's prediction, the default).
+  enum class Records { Predict, Replay };
 
-  /// Advances every car by dt, each by its own behavior. An IDM car follows
+  TrafficModel(const Scenario& scenario, const Config& config, Records records = Records::Predict);
+
+  /// Advances every car by dt, each by its own behavior; a replayed car to
+  /// its record's state at the new time, whatever is ahead. An IDM car follows
   /// the nearest car ahead in its lane, the ego included once its body is in
   /// that lane; under traffic.followers_react the other cars do too where
   /// their behavior would take them past Krauss's safe speed. No car brakes
@@ -112,7 +125,8 @@ class TrafficModel {
   std::vector<Behavior> behavior_;
   std::vector<double> lane_center_;
   std::vector<double> length_;
-  std::vector<double> behavior_accel_;  ///< a constant-acceleration car's own a
+  std::vector<double> behavior_accel_;                 ///< a constant-acceleration car's own a
+  std::vector<std::optional<RecordedTrack>> records_;  ///< a replayed car's, under Records::Replay
   std::vector<CarState> cars_;
   std::vector<double> accel_;  ///< this step's accelerations, before any car moves
   /// this step: 1 where a car followed (its acceleration set by) the car ahead,

@@ -104,6 +104,8 @@ void Config::validate() const {
   require(traffic.follow_decel > 0, "traffic.follow_decel", "must be positive");
   require(!expert.cut_in_decel || *expert.cut_in_decel > 0, "expert.cut_in_decel",
           "must be positive or null");
+  require(traffic.replay_prediction != Behavior::Replay, "traffic.replay_prediction",
+          "must be a model (constant_speed, constant_accel or idm), not replay");
   require(!traffic.max_decel || *traffic.max_decel > 0, "traffic.max_decel",
           "must be positive, or null for no limit");
   require(closed_loop.unsafe_decel > 0, "closed_loop.unsafe_decel", "must be positive");

@@ -58,12 +58,20 @@ void visit_fields(V& v, S& s) requires std::same_as<std::remove_const_t<S>, Clos
   v("unsafe_decel", s.unsafe_decel);
 }
 
+inline constexpr std::array<detail::EnumName<Behavior>, 4> enum_names(Behavior) {
+  return {{{Behavior::ConstantSpeed, "constant_speed"},
+           {Behavior::ConstantAccel, "constant_accel"},
+           {Behavior::Idm, "idm"},
+           {Behavior::Replay, "replay"}}};
+}
+
 template <class V, class S>
 void visit_fields(V& v, S& s) requires std::same_as<std::remove_const_t<S>, TrafficSettings> {
   v("followers_react", s.followers_react);
   v("reaction_time", s.reaction_time);
   v("follow_decel", s.follow_decel);
   v("max_decel", s.max_decel);
+  v("replay_prediction", s.replay_prediction);
 }
 
 inline constexpr std::array<detail::EnumName<Globalisation>, 2> enum_names(Globalisation) {

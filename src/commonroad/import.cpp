@@ -148,15 +148,43 @@ class Cutter {
       OtherCar car;
       car.id = std::to_string(o.id);
       car.lane = lane.holds(*at) ? Lane::Ego : Lane::Target;
-      const double along = state->velocity * std::cos(wrapped(state->orientation - p.heading));
-      car.state = {p.s - ego_s, std::max(along, 0.0), state->acceleration};
-      car.behavior = settings_.behavior;
+      car.state = {p.s - ego_s, speed_along(*state, p), state->acceleration};
+      car.behavior =
+          settings_.reactive_behind && car.state.x < 0.0 ? Behavior::Idm : settings_.behavior;
       car.size = VehicleSize{o.length, o.width};
+      if (car.behavior == Behavior::Replay) {
+        car.record = track(o, t, lane, car.lane == Lane::Ego ? lane_set(lane) : target, ego_s);
+      }
       s.cars.push_back(std::move(car));
     }
     std::sort(s.cars.begin(), s.cars.end(), [](const OtherCar& a, const OtherCar& b) {
       return a.lane != b.lane ? a.lane == Lane::Ego : a.state.x < b.state.x;
     });
+  }
+
+  static double speed_along(const State& state, const Projection& p) {
+    return std::max(state.velocity * std::cos(wrapped(state.orientation - p.heading)), 0.0);
+  }
+
+  static std::set<int> lane_set(const LaneChain& lane) {
+    return {lane.lanelets.begin(), lane.lanelets.end()};
+  }
+
+  // The car's record from step t on, along the ego lane's centre line, for
+  // as long as its centre stays in `own` (the lanelets of its lane).
+  RecordedTrack track(const Obstacle& o, int t, const LaneChain& lane, const std::set<int>& own,
+                      double ego_s) const {
+    RecordedTrack out;
+    out.dt = rec_.time_step_size;
+    for (int k = t; k <= o.states.back().time_step; ++k) {
+      const auto at = lanelet_of(o, k);
+      if (!at || !own.contains(*at)) break;
+      const State& state = *o.at(k);
+      const Projection p = lane.centre.project(state.position);
+      out.x.push_back(p.s - ego_s);
+      out.v.push_back(speed_along(state, p));
+    }
+    return out;
   }
 
   // The recorded ego's first step with its centre in the target lane, and

@@ -77,6 +77,7 @@ Scenario ScenarioSampler::dense(Rng& rng, Behavior behavior) const {
                       lane,
                       {x, v, behavior == Behavior::ConstantAccel ? a : 0.0},
                       behavior,
+                      std::nullopt,
                       std::nullopt});
   };
   const double leader_v = rng.uniform(p.leader_speed);

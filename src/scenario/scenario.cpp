@@ -7,7 +7,7 @@
 
 #include "common/config_fields.hpp"
 #include "lanechange/geometry.hpp"
-#include "scenario/origin.hpp"
+#include "scenario/recorded_fields.hpp"
 
 namespace lanechange {
 
@@ -18,16 +18,18 @@ std::string_view to_string(Behavior behavior) {
     case Behavior::ConstantSpeed: return "constant_speed";
     case Behavior::ConstantAccel: return "constant_accel";
     case Behavior::Idm: return "idm";
+    case Behavior::Replay: return "replay";
   }
   return "?";
 }
 
 Behavior behavior_from_string(std::string_view name, const std::string& field) {
-  for (Behavior b : {Behavior::ConstantSpeed, Behavior::ConstantAccel, Behavior::Idm}) {
+  for (Behavior b :
+       {Behavior::ConstantSpeed, Behavior::ConstantAccel, Behavior::Idm, Behavior::Replay}) {
     if (to_string(b) == name) return b;
   }
   throw InputError(field, "unknown behavior \"" + std::string(name) +
-                              "\" (expected constant_speed, constant_accel or idm)");
+                              "\" (expected constant_speed, constant_accel, idm or replay)");
 }
 
 std::string_view to_string(Lane lane) { return lane == Lane::Ego ? "ego" : "target"; }
@@ -41,6 +43,17 @@ std::string_view to_string(Role role) {
     case Role::Target: return "target";
   }
   return "?";
+}
+
+CarState RecordedTrack::at(double t) const {
+  const double steps = std::max(t, 0.0) / dt;
+  const auto last = x.size() - 1;
+  if (steps >= static_cast<double>(last)) {
+    return {x[last] + v[last] * (steps - static_cast<double>(last)) * dt, v[last], 0.0};
+  }
+  const auto k = static_cast<std::size_t>(steps);
+  const double f = steps - static_cast<double>(k);
+  return {x[k] + f * (x[k + 1] - x[k]), v[k] + f * (v[k + 1] - v[k]), (v[k + 1] - v[k]) / dt};
 }
 
 void Scenario::set_behavior(Behavior b) {
@@ -262,7 +275,10 @@ std::string car_path(std::size_t i) {
 // The shape format 1 holds: the paper's three cars, in Role order, of the
 // scene's behavior.
 bool has_three_car_shape(const Scenario& s) {
-  if (s.cars.size() != 3 || s.target_side != Side::Left || s.origin) return false;
+  if (s.cars.size() != 3 || s.target_side != Side::Left || s.origin ||
+      s.behavior == Behavior::Replay) {
+    return false;
+  }
   for (const Role role : kRoles) {
     const auto i = static_cast<std::size_t>(role);
     const OtherCar& car = s.cars[i];
@@ -365,6 +381,9 @@ Behavior read_behavior(const json& object, const std::string& path, const char* 
 }
 
 void read_format_1_cars(const json& root, Scenario& s) {
+  if (s.behavior == Behavior::Replay) {
+    throw InputError("behavior", "replay needs format 2, whose cars carry their records");
+  }
   const bool accel_required = s.behavior == Behavior::ConstantAccel;
   for (const Role role : kRoles) {
     const std::string name(to_string(role));
@@ -396,8 +415,8 @@ std::optional<Role> read_role(const json& j, const std::string& path) {
 
 OtherCar read_other_car(const json& j, const std::string& path, Behavior scene_behavior) {
   require(j.is_object(), path, "must be an object");
-  reject_unknown_keys(j, path,
-                      {"id", "lane", "x", "v", "a", "length", "width", "behavior", "role"});
+  reject_unknown_keys(
+      j, path, {"id", "lane", "x", "v", "a", "length", "width", "behavior", "role", "record"});
   OtherCar car;
   const json& id = required(j, path, "id");
   require(id.is_string(), detail::join_path(path, "id"), "must be a string");
@@ -405,6 +424,13 @@ OtherCar read_other_car(const json& j, const std::string& path, Behavior scene_b
   car.lane = read_lane(j, path);
   car.behavior = j.contains("behavior") ? read_behavior(j, path, "behavior") : scene_behavior;
   car.state = read_car_state(j, path, car.behavior == Behavior::ConstantAccel);
+  const auto record = j.find("record");
+  if (car.behavior == Behavior::Replay) {
+    if (record == j.end()) throw InputError(path + ".record", "missing: a replayed car needs one");
+    car.record = detail::read_recorded_track(*record, path + ".record", car.state);
+  } else if (record != j.end()) {
+    throw InputError(path + ".record", "only a car of behavior replay has a record");
+  }
   return car;
 }
 
@@ -535,6 +561,7 @@ json car_to_json(const Scenario& s, CarIndex i, bool format_1) {
     out["length"] = car.size->length;
     out["width"] = car.size->width;
   }
+  if (car.record) out["record"] = detail::write_recorded_track(*car.record);
   return out;
 }
 

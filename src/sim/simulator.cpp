@@ -24,7 +24,11 @@ using Clock = std::chrono::steady_clock;
 class Loop {
  public:
   Loop(const Scenario& scene, const Config& config)
-      : scene_(scene), config_(config), traffic_(scene, config), keeper_(config) {
+      : scene_(scene),
+        planning_scene_(planning_view(scene, config.traffic)),
+        config_(config),
+        traffic_(scene, config, TrafficModel::Records::Replay),
+        keeper_(config) {
     ego_ = scene.ego;
     dt_ = scene.horizon / scene.steps;
     path_.dt = dt_;
@@ -33,14 +37,14 @@ class Loop {
     path_.others.dt = dt_;
     path_.others.cars.resize(scene.car_count());
     path_.cars = tracked_cars(scene);
-    observation_.scene = &scene_;
+    observation_.scene = &planning_scene_;
     observation_.cars.resize(scene.car_count());
     record_node();
   }
 
   void run(const planner::ClosedLoopPlanner& planner, int steps, Rollout& out) {
     path_.planner = std::string(planner.name());
-    auto session = planner.start(scene_);
+    auto session = planner.start(planning_scene_);
     for (int k = 0; k < steps; ++k) {
       const Observation& o = observe(k);
       StepRecord record;
@@ -142,6 +146,8 @@ class Loop {
   }
 
   const Scenario& scene_;
+  /// What the planners see: replayed cars by their predicted behavior, no record.
+  Scenario planning_scene_;
   const Config& config_;
   TrafficModel traffic_;
   planner::LaneKeeper keeper_;

@@ -82,18 +82,34 @@ std::optional<SafeGapLine> gap_braking_at_most(double decel, Behavior behavior, 
                                                double leader_speed, double dt,
                                                const IdmParameters& idm,
                                                const TrafficSettings& traffic) {
-  if (behavior == Behavior::Idm) return idm_gap_braking_at_most(decel, speed, leader_speed, idm);
+  if (predicted_behavior(behavior, traffic) == Behavior::Idm)
+    return idm_gap_braking_at_most(decel, speed, leader_speed, idm);
   if (!traffic.followers_react) return std::nullopt;
   return krauss_gap_braking_at_most(decel, speed, leader_speed, dt, traffic);
 }
 
-bool traffic_reacts(const Scenario& scenario, const Config& config) {
-  if (config.traffic.followers_react && scenario.car_count() > 0) return true;
-  return std::any_of(scenario.cars.begin(), scenario.cars.end(),
-                     [](const OtherCar& car) { return car.behavior == Behavior::Idm; });
+Behavior predicted_behavior(Behavior behavior, const TrafficSettings& traffic) {
+  return behavior == Behavior::Replay ? traffic.replay_prediction : behavior;
 }
 
-TrafficModel::TrafficModel(const Scenario& scenario, const Config& config)
+Scenario planning_view(const Scenario& scenario, const TrafficSettings& traffic) {
+  Scenario view = scenario;
+  view.behavior = predicted_behavior(view.behavior, traffic);
+  for (OtherCar& car : view.cars) {
+    car.behavior = predicted_behavior(car.behavior, traffic);
+    car.record.reset();
+  }
+  return view;
+}
+
+bool traffic_reacts(const Scenario& scenario, const Config& config) {
+  if (config.traffic.followers_react && scenario.car_count() > 0) return true;
+  return std::any_of(scenario.cars.begin(), scenario.cars.end(), [&](const OtherCar& car) {
+    return predicted_behavior(car.behavior, config.traffic) == Behavior::Idm;
+  });
+}
+
+TrafficModel::TrafficModel(const Scenario& scenario, const Config& config, Records records)
     : lane_width_(scenario.lane_width),
       vehicle_(scenario.vehicle),
       idm_(scenario.idm),
@@ -110,8 +126,15 @@ TrafficModel::TrafficModel(const Scenario& scenario, const Config& config)
   length_.reserve(n);
   behavior_accel_.reserve(n);
   cars_.reserve(n);
+  records_.resize(n);
   for (CarIndex i = 0; i < n; ++i) {
-    behavior_.push_back(scenario.cars[i].behavior);
+    const OtherCar& car = scenario.cars[i];
+    if (records == Records::Replay && car.behavior == Behavior::Replay && car.record) {
+      behavior_.push_back(Behavior::Replay);
+      records_[i] = *car.record;
+    } else {
+      behavior_.push_back(predicted_behavior(car.behavior, config.traffic));
+    }
     lane_center_.push_back(scenario.lane_center(i));
     length_.push_back(scenario.size_of(i).length);
     cars_.push_back(scenario.car(i));
@@ -143,6 +166,7 @@ double TrafficModel::acceleration_of(CarIndex which, const EgoFootprint& ego, do
   follows_[which] = 0;
   followed_ego_[which] = 0;
   const CarState& me = cars_[which];
+  if (behavior_[which] == Behavior::Replay) return records_[which]->at(time_ + dt).a;
   const Ahead ahead = ahead_of(which, ego);
   const bool has_ahead = std::isfinite(ahead.gap);
   if (behavior_[which] == Behavior::Idm) {
@@ -181,7 +205,9 @@ void TrafficModel::step(double dt, const EgoFootprint& ego) {
   for (CarIndex i = 0; i < cars_.size(); ++i) accel_[i] = acceleration_of(i, ego, dt);
   for (CarIndex i = 0; i < cars_.size(); ++i) {
     cars_[i].a = accel_[i];
-    if (behavior_[i] == Behavior::Idm || follows_[i] != 0) {
+    if (behavior_[i] == Behavior::Replay) {
+      cars_[i] = records_[i]->at(time_ + dt);
+    } else if (behavior_[i] == Behavior::Idm || follows_[i] != 0) {
       advance_ballistic(cars_[i], dt);
     } else {
       advance_constant_accel(cars_[i], dt, speed_cap_);

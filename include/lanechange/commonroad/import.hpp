@@ -34,8 +34,12 @@ struct ImportSettings {
   double range = 100.0;
   /// Also cut scenes with the target lane to the right.
   bool right = false;
-  /// Every car's behavior in the scene.
-  Behavior behavior = Behavior::ConstantSpeed;
+  /// Every car's behavior in the scene. Replay: each car moves as recorded,
+  /// until its record ends or it leaves its lane, and on at its last speed.
+  Behavior behavior = Behavior::Replay;
+  /// The cars behind the ego follow IDM instead, so that a cut-in meets a
+  /// car that answers it (a replayed car never brakes for the ego).
+  bool reactive_behind = false;
   /// The ego's speed bound in the scene: highway traffic outruns the
   /// paper's urban bound.
   double max_speed = 120.0 / 3.6;

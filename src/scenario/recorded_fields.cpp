@@ -1,9 +1,11 @@
-#include "scenario/origin.hpp"
+#include "scenario/recorded_fields.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <initializer_list>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "common/json_fields.hpp"
 #include "lanechange/error.hpp"
@@ -52,6 +54,23 @@ HumanLaneChange read_human_change(const json& j, const std::string& path) {
 
 json id_or_null(const std::optional<std::string>& id) { return id ? json(*id) : json(nullptr); }
 
+std::vector<double> samples(const json& j, const std::string& path, const char* key) {
+  const json& list = member(j, path, key);
+  const std::string where = join_path(path, key);
+  if (!list.is_array() || list.empty()) throw InputError(where, "must be a non-empty array");
+  std::vector<double> out(list.size());
+  for (std::size_t k = 0; k < list.size(); ++k)
+    read_value(list[k], where + "[" + std::to_string(k) + "]", out[k]);
+  return out;
+}
+
+// The record starts where the file puts the car: one place for its start.
+void require_start(double recorded, double given, const std::string& where) {
+  if (std::abs(recorded - given) > 1e-6 * std::max(1.0, std::abs(given))) {
+    throw InputError(where, "must equal the car's own value at t = 0");
+  }
+}
+
 }  // namespace
 
 SceneOrigin read_scene_origin(const json& j) {
@@ -80,6 +99,30 @@ SceneOrigin read_scene_origin(const json& j) {
     origin.human_change = read_human_change(*change, "origin.human_change");
   }
   return origin;
+}
+
+RecordedTrack read_recorded_track(const json& j, const std::string& path, const CarState& start) {
+  if (!j.is_object()) throw InputError(path, "must be an object");
+  reject_unknown(j, path, {"dt", "x", "v"});
+  RecordedTrack track;
+  read_value(member(j, path, "dt"), join_path(path, "dt"), track.dt);
+  if (track.dt <= 0.0) throw InputError(join_path(path, "dt"), "must be positive");
+  track.x = samples(j, path, "x");
+  track.v = samples(j, path, "v");
+  if (track.v.size() != track.x.size()) {
+    throw InputError(join_path(path, "v"), "must have as many samples as x");
+  }
+  for (std::size_t k = 0; k < track.v.size(); ++k) {
+    if (track.v[k] < 0.0)
+      throw InputError(path + ".v[" + std::to_string(k) + "]", "speed must not be negative");
+  }
+  require_start(track.x[0], start.x, path + ".x[0]");
+  require_start(track.v[0], start.v, path + ".v[0]");
+  return track;
+}
+
+json write_recorded_track(const RecordedTrack& track) {
+  return {{"dt", track.dt}, {"x", track.x}, {"v", track.v}};
 }
 
 json write_scene_origin(const SceneOrigin& origin) {
