@@ -421,6 +421,8 @@ OtherCar read_other_car(const json& j, const std::string& path, Behavior scene_b
   const json& id = required(j, path, "id");
   require(id.is_string(), detail::join_path(path, "id"), "must be a string");
   car.id = id.get<std::string>();
+  require(car.id.find_first_of(",\"\n\r") == std::string::npos, detail::join_path(path, "id"),
+          "must not hold a comma, quote or line break (results name cars in CSV files)");
   car.lane = read_lane(j, path);
   car.behavior = j.contains("behavior") ? read_behavior(j, path, "behavior") : scene_behavior;
   car.state = read_car_state(j, path, car.behavior == Behavior::ConstantAccel);

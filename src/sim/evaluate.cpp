@@ -29,7 +29,7 @@ using nlohmann::json;
 
 namespace {
 
-constexpr std::string_view kEvaluationFormat = "lanechange.evaluation/4";
+constexpr std::string_view kEvaluationFormat = "lanechange.evaluation/5";
 constexpr const char* kManifest = "evaluation.json";
 
 // The scene files of a folder, in the order of their names, each loaded
@@ -149,6 +149,16 @@ std::string number(double v) {
   return out.str();
 }
 
+// The id of the target-lane car behind or ahead of the ego at the end, or ""
+// where it did not end in the target lane or that side was empty.
+std::string gap_car(const Rollout& r, const char* side) {
+  const auto gap = r.trajectory.details.find("gap");
+  if (gap == r.trajectory.details.end() || !gap->contains(side) || !(*gap)[side].is_string()) {
+    return "";
+  }
+  return (*gap)[side].get<std::string>();
+}
+
 std::string rollout_row(long long index, const Scenario& s, const std::string& planner,
                         const Rollout& r) {
   const RolloutMetrics& m = r.metrics;
@@ -161,14 +171,16 @@ std::string rollout_row(long long index, const Scenario& s, const std::string& p
     row += ',';
     row += std::to_string(v);
   }
-  for (double v : {m.time_to_target_lane >= 0 ? m.time_to_target_lane : NAN, m.min_gap, m.min_ttc,
-                   m.max_abs_accel, m.rms_jerk, m.max_abs_omega, m.median_step_ms, m.p99_step_ms,
-                   m.max_step_ms, m.first_takeover_t >= 0 ? m.first_takeover_t : NAN,
-                   m.forced_decel, m.max_car_decel}) {
+  for (double v :
+       {m.time_to_target_lane >= 0 ? m.time_to_target_lane : NAN, m.min_gap, m.min_ttc,
+        m.max_abs_accel, m.rms_jerk, m.max_abs_omega, m.median_step_ms, m.p99_step_ms,
+        m.max_step_ms, m.first_takeover_t >= 0 ? m.first_takeover_t : NAN, m.forced_decel,
+        m.max_car_decel, m.time_to_lane_line >= 0 ? m.time_to_lane_line : NAN}) {
     row += ',';
     row += number(v);
   }
-  return row + "," + m.target_lane_slot + "," + run::csv_field(r.reason) + "\n";
+  return row + "," + m.target_lane_slot + "," + gap_car(r, "behind") + "," + gap_car(r, "ahead") +
+         "," + run::csv_field(r.reason) + "\n";
 }
 
 void write_scene_index(const std::string& out_dir, const SceneFiles& files) {
@@ -207,7 +219,10 @@ std::vector<std::string> rollout_columns() {
           "first_takeover_t",
           "forced_decel",
           "max_car_decel",
+          "time_to_lane_line",
           "target_lane_slot",
+          "gap_behind",
+          "gap_ahead",
           "reason"};
 }
 
@@ -289,6 +304,15 @@ EvaluateReport evaluate(const EvaluateOptions& o, const EvaluateRun& run) {
   if (team.rank() == 0) {
     detail::write_results(o.out_dir, report.shards_total);
     if (!files.names.empty()) write_scene_index(o.out_dir, files);
+    const bool humans_changed =
+        std::any_of(files.scenes.begin(), files.scenes.end(),
+                    [](const Scenario& s) { return s.origin && s.origin->human_change; });
+    if (humans_changed) {
+      const std::vector<RolloutRow> rows =
+          read_rollouts((fs::path(o.out_dir) / "rollouts.csv").string());
+      detail::write_human_comparison(o.out_dir,
+                                     compare_with_humans(files.scenes, rows, o.planners));
+    }
     json manifest = {
         {"format", kEvaluationFormat}, {"status", "complete"}, {"parameters", parameters}};
     lanechange::detail::write_file_atomically((fs::path(o.out_dir) / kManifest).string(),

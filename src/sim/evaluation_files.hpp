@@ -4,6 +4,8 @@
 #include <string>
 #include <vector>
 
+#include "lanechange/sim/evaluate.hpp"
+
 namespace lanechange::sim::detail {
 
 /// rollouts-SSSSS.csv: the rows of shard s.
@@ -14,5 +16,7 @@ namespace lanechange::sim::detail {
 
 /// rollouts.csv (the shards in order) and summary.csv, from the shard files.
 void write_results(const std::string& dir, long long shards);
+/// human.csv in `dir`: one row per planner (docs/recorded.md).
+void write_human_comparison(const std::string& dir, const std::vector<HumanComparison>& rows);
 
 }  // namespace lanechange::sim::detail

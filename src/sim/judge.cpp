@@ -141,6 +141,12 @@ RolloutMetrics measure(const Rollout& rollout, const Scenario& scene, const Conf
       break;
     }
   }
+  for (int k = 0; k < t.nodes(); ++k) {
+    if (t.ego[k].y >= scene.lane_width / 2.0) {
+      m.time_to_lane_line = t.t[k];
+      break;
+    }
+  }
   traffic_measures(t, scene, m);
   car_measures(t, m);
   m.target_lane_slot = target_lane_slot(t, scene);

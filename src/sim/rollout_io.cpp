@@ -47,6 +47,8 @@ json rollout_to_json(const Rollout& r) {
   out["metrics"] = {
       {"time_to_target_lane",
        run::number_or_null(m.time_to_target_lane >= 0 ? m.time_to_target_lane : NAN)},
+      {"time_to_lane_line",
+       run::number_or_null(m.time_to_lane_line >= 0 ? m.time_to_lane_line : NAN)},
       {"min_gap", run::number_or_null(m.min_gap)},
       {"min_ttc", run::number_or_null(m.min_ttc)},
       {"max_abs_accel", m.max_abs_accel},

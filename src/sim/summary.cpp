@@ -48,7 +48,9 @@ RolloutRow parse(const std::string& line) {
   r.at_fault = f[5] == "1";
   r.unsafe_cut_in = f[6] == "1";
   r.cars_collide = f[7] == "1";
-  r.target_lane_slot = f[before_reason - 1];
+  r.target_lane_slot = f[before_reason - 3];
+  r.gap_behind = f[before_reason - 2];
+  r.gap_ahead = f[before_reason - 1];
   if (!r.target_lane_slot.empty() && r.target_lane_slot != "follower_target_gap" &&
       r.target_lane_slot != "ahead_of_target" && r.target_lane_slot != "behind_follower") {
     throw std::invalid_argument("unknown target_lane_slot \"" + r.target_lane_slot + "\"");
@@ -58,7 +60,7 @@ RolloutRow parse(const std::string& line) {
                        &r.min_gap,      &r.min_ttc,       &r.max_abs_accel,
                        &r.rms_jerk,     &r.max_abs_omega, &r.median_step_ms,
                        &r.p99_step_ms,  &r.max_step_ms,   &r.first_takeover_t,
-                       &r.forced_decel, &r.max_car_decel};
+                       &r.forced_decel, &r.max_car_decel, &r.time_to_lane_line};
   std::size_t column = 8;
   for (double* value : numbers) *value = cell_number(f[column++]);
   r.reason = reason;

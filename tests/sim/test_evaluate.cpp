@@ -119,6 +119,8 @@ TEST(Evaluate, RolloutsReadBackAsWrittenAndAForeignFileIsNamed) {
     // The expert's problem (Eq. 1) admits only the follower-target gap.
     if (row.planner == "miqp" && row.success()) {
       EXPECT_EQ(row.target_lane_slot, "follower_target_gap") << row.index;
+      EXPECT_EQ(row.gap_behind, "follower") << row.index;
+      EXPECT_EQ(row.gap_ahead, "target") << row.index;
     }
   }
   testing::write_text(dir.file("bad.csv"), "index,behavior\n1,idm\n");
@@ -131,10 +133,11 @@ TEST(Evaluate, RolloutsReadBackAsWrittenAndAForeignFileIsNamed) {
   auto text = testing::read_text(dir.file("ev/rollouts.csv"));
   testing::write_text(dir.file("short.csv"), text + "7,idm,miqp\n");
   EXPECT_THROW((void)sim::read_rollouts(dir.file("short.csv")), InputError);
-  // A first row whose target_lane_slot (the cell before the reason) is foreign.
+  // A first row whose target_lane_slot (the cell before the gap's two cars and
+  // the reason) is foreign.
   const auto lines = lines_of(dir.file("ev/rollouts.csv"));
   std::size_t slot_start = 0;
-  for (std::size_t commas = 0; commas < sim::rollout_columns().size() - 2; ++commas) {
+  for (std::size_t commas = 0; commas < sim::rollout_columns().size() - 4; ++commas) {
     slot_start = lines[1].find(',', slot_start) + 1;
   }
   const std::string foreign =

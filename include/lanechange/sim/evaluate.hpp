@@ -72,7 +72,11 @@ struct RolloutRow {
   double max_abs_omega = 0, median_step_ms = 0, p99_step_ms = 0, max_step_ms = 0;
   double first_takeover_t = 0;                 ///< s; NaN: none
   double forced_decel = 0, max_car_decel = 0;  ///< m/s^2
+  double time_to_lane_line = 0;                ///< s; NaN: never
   std::string target_lane_slot;                ///< RolloutMetrics::target_lane_slot
+  /// The ids of the target-lane cars behind and ahead of the ego at the end
+  /// (the rollout's details.gap); empty where none.
+  std::string gap_behind, gap_ahead;
   [[nodiscard]] bool success() const { return outcome == "well_posed" && !collision; }
 };
 
@@ -87,6 +91,25 @@ struct RolloutRates {
 };
 /// All zero for no rows.
 [[nodiscard]] RolloutRates rates_of(std::span<const RolloutRow* const> rows);
+
+/// Each planner beside the recorded drivers, over the scenes cut from
+/// recordings in which the driver changed into the target lane
+/// (SceneOrigin::human_change; docs/recorded.md).
+struct HumanComparison {
+  std::string planner;
+  long long scenes = 0;     ///< scenes where the driver changed into the target lane
+  long long changed = 0;    ///< of them, rollouts whose ego's centre crossed into it too
+  long long same_gap = 0;   ///< of those, ended between the two cars the driver went between
+  long long succeeded = 0;  ///< of the scenes, successful rollouts
+  /// s: when the rollout's ego crossed into the target lane minus when the
+  /// driver did (both the centre crossing the line), median over `changed`
+  /// (NaN for none); negative is sooner than the driver.
+  double time_difference_p50 = 0.0;
+};
+/// `rows` index `scenes` (evaluate --scenarios); planners in the given order.
+[[nodiscard]] std::vector<HumanComparison> compare_with_humans(
+    std::span<const Scenario> scenes, std::span<const RolloutRow> rows,
+    const std::vector<std::string>& planners);
 
 /// Reads a rollouts.csv (or one of its shards). InputError naming the file
 /// for a missing file, a header that is not ours, or a malformed row.

@@ -45,6 +45,9 @@ struct StepRecord {
 /// What evaluate tabulates per rollout.
 struct RolloutMetrics {
   double time_to_target_lane = -1.0;  ///< s until |y - w| <= labels.reach first; -1: never
+  /// s until the ego's centre first crossed into the target lane (y >= w / 2),
+  /// as a recorded driver's change is timed; -1: never
+  double time_to_lane_line = -1.0;
   double min_gap = 0.0;  ///< m, bumper to bumper, to a car in a lane the ego's body touches
   double min_ttc = 0.0;  ///< s, to such a car while closing in; infinity if never closing
   double max_abs_accel = 0.0;
