@@ -138,6 +138,7 @@ class Cutter {
   void add_cars(Scenario& s, const StartPoint& start, const LaneChain& lane,
                 const std::set<int>& target, double ego_s) const {
     const int t = start.state.time_step;
+    const std::set<int> own_lane(lane.lanelets.begin(), lane.lanelets.end());
     for (const Obstacle& o : rec_.obstacles) {
       const State* state = o.at(t);
       if (&o == start.recorded || state == nullptr) continue;
@@ -153,7 +154,7 @@ class Cutter {
           settings_.reactive_behind && car.state.x < 0.0 ? Behavior::Idm : settings_.behavior;
       car.size = VehicleSize{o.length, o.width};
       if (car.behavior == Behavior::Replay) {
-        car.record = track(o, t, lane, car.lane == Lane::Ego ? lane_set(lane) : target, ego_s);
+        car.record = track(o, t, lane, car.lane == Lane::Ego ? own_lane : target, ego_s);
       }
       s.cars.push_back(std::move(car));
     }
@@ -164,10 +165,6 @@ class Cutter {
 
   static double speed_along(const State& state, const Projection& p) {
     return std::max(state.velocity * std::cos(wrapped(state.orientation - p.heading)), 0.0);
-  }
-
-  static std::set<int> lane_set(const LaneChain& lane) {
-    return {lane.lanelets.begin(), lane.lanelets.end()};
   }
 
   // The car's record from step t on, along the ego lane's centre line, for

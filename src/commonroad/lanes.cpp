@@ -15,11 +15,15 @@ double distance(Point a, Point b) { return std::hypot(b.x - a.x, b.y - a.y); }
 
 Point midpoint(Point a, Point b) { return {(a.x + b.x) / 2.0, (a.y + b.y) / 2.0}; }
 
-// Crossing number of p against the lanelet's outline: the left bound forward,
-// the right bound back.
-bool inside(const Lanelet& l, Point p) {
+// The lanelet's outline: the left bound forward, the right bound back.
+std::vector<Point> outline(const Lanelet& l) {
   std::vector<Point> ring(l.left);
   ring.insert(ring.end(), l.right.rbegin(), l.right.rend());
+  return ring;
+}
+
+// Crossing number of p against an outline.
+bool inside(const std::vector<Point>& ring, Point p) {
   bool in = false;
   for (std::size_t i = 0, j = ring.size() - 1; i < ring.size(); j = i++) {
     const Point a = ring[i];
@@ -83,7 +87,9 @@ bool LaneChain::holds(int lanelet) const {
 
 LaneNetwork::LaneNetwork(const Recording& recording) : recording_(recording) {
   centres_.reserve(recording.lanelets.size());
+  outlines_.reserve(recording.lanelets.size());
   for (const Lanelet& l : recording.lanelets) {
+    outlines_.push_back(outline(l));
     try {
       centres_.emplace_back(centre_points(l));
     } catch (const std::invalid_argument&) {
@@ -98,7 +104,7 @@ std::optional<int> LaneNetwork::lanelet_at(Point p) const {
   double best_d = std::numeric_limits<double>::infinity();
   for (std::size_t i = 0; i < recording_.lanelets.size(); ++i) {
     const Lanelet& l = recording_.lanelets[i];
-    if (!inside(l, p)) continue;
+    if (!inside(outlines_[i], p)) continue;
     const double d = std::abs(centres_[i].project(p).d);
     if (d < best_d) {
       best_d = d;

@@ -52,7 +52,8 @@ class LaneNetwork {
 
  private:
   const Recording& recording_;
-  std::vector<Polyline> centres_;  ///< of recording_.lanelets, in order
+  std::vector<Polyline> centres_;             ///< of recording_.lanelets, in order
+  std::vector<std::vector<Point>> outlines_;  ///< the same lanelets' areas, as rings
 };
 
 }  // namespace lanechange::commonroad::detail

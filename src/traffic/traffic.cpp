@@ -166,7 +166,8 @@ double TrafficModel::acceleration_of(CarIndex which, const EgoFootprint& ego, do
   follows_[which] = 0;
   followed_ego_[which] = 0;
   const CarState& me = cars_[which];
-  if (behavior_[which] == Behavior::Replay) return records_[which]->at(time_ + dt).a;
+  // step() takes a replayed car's whole state, its a included, from its record.
+  if (behavior_[which] == Behavior::Replay) return 0.0;
   const Ahead ahead = ahead_of(which, ego);
   const bool has_ahead = std::isfinite(ahead.gap);
   if (behavior_[which] == Behavior::Idm) {
