@@ -4,8 +4,9 @@
 // incumbents apart), interior-point iterations and CPU time, then the
 // median and mean plan and the totals. Not a timing claim of its own (the
 // benchmarks make those); it shows which plans and rounds carry the mean.
-//   plan_stats [COUNT=100] [--quiet] [--fixed-gap]
-// --fixed-gap plans through Eq. 1's gap alone (expert.gap = fixed).
+//   plan_stats [COUNT=100] [--quiet] [--fixed-gap] [--target-lane-cars N]
+// --fixed-gap plans through Eq. 1's gap alone (expert.gap = fixed);
+// --target-lane-cars samples dense scenes with N cars in the target lane.
 #include <time.h>
 
 #include <algorithm>
@@ -47,6 +48,10 @@ int main(int argc, char** argv) {
   for (int i = 2; i < argc; ++i) {
     quiet = quiet || std::strcmp(argv[i], "--quiet") == 0;
     if (std::strcmp(argv[i], "--fixed-gap") == 0) config.expert.gap = lc::GapChoice::Fixed;
+    if (std::strcmp(argv[i], "--target-lane-cars") == 0 && i + 1 < argc) {
+      const double cars = std::atof(argv[++i]);
+      config.sampler.target_lane_cars = {cars, cars};
+    }
   }
   if (count < 1) {
     std::fprintf(stderr, "plan_stats: COUNT must be a positive number of scenes\n");

@@ -195,12 +195,28 @@ enum class HorizonMode {
   Shrinking,  ///< the re-plans end at the first plan's t_f (down to min_horizon)
 };
 
+/// What bounds a planner's step in closed loop (docs/closed_loop.md).
+enum class Deadline {
+  /// Budgets of work (closed_loop.step_qp_iterations, mpc.max_iterations),
+  /// sized to fit step_budget_ms on the reference machine: the same command
+  /// gives the same outcomes on any load. A step over step_budget_ms of wall
+  /// time is counted as an overrun, and its decision stands.
+  Work,
+  /// As in a car: the planners also stop at the wall clock, and a step over
+  /// step_budget_ms is overruled by the fallback.
+  WallClock,
+};
+
 /// The closed loop: the simulator, the fallback and lane keeper, the
 /// receding-horizon expert and the hierarchical planner (docs/closed_loop.md).
 struct ClosedLoopSettings {
   double settle_time = 3.0;       ///< s the run goes on after the planning horizon
-  double step_budget_ms = 100.0;  ///< a planner that takes longer is overruled for the step
-  int replan_period = 1;          ///< the expert re-plans every this many steps
+  double step_budget_ms = 100.0;  ///< the step's deadline (see deadline)
+  Deadline deadline = Deadline::Work;
+  /// The expert's interior-point iterations per step under Deadline::Work:
+  /// about 80 ms on the reference machine (docs/closed_loop.md).
+  int step_qp_iterations = 2500;
+  int replan_period = 1;  ///< the expert re-plans every this many steps
   /// Shrinking: a receding plan keeps putting the crossing off to its end
   /// and waits at the line (docs/closed_loop.md).
   HorizonMode horizon_mode = HorizonMode::Shrinking;
@@ -246,6 +262,12 @@ struct ClosedLoopSettings {
   double unsafe_decel = 4.0;
 };
 
+/// The wall-clock limit of a planner's step whose own limit is `own_ms`:
+/// that under Deadline::WallClock; under Deadline::Work a guard against a
+/// planner that hangs, ten step budgets, far beyond what the work budgets
+/// take on the reference machine.
+[[nodiscard]] double step_wall_limit_ms(const ClosedLoopSettings& c, double own_ms);
+
 /// The paper's MPC baseline (docs/baselines.md, "mpc"). Its horizon, dt,
 /// weights and limits are the expert's; these are its own.
 struct MpcSettings {
@@ -255,7 +277,10 @@ struct MpcSettings {
   /// program's callback enforces the wall time)
   double time_limit_ms = 80.0;
   int max_iterations = 100;  ///< Ipopt iterations per solve
-  double tolerance = 1e-4;   ///< Ipopt's tol
+  /// Ipopt iterations per closed-loop step under closed_loop.deadline =
+  /// work: about 80 ms on the reference machine (docs/baselines.md).
+  int step_iterations = 12;
+  double tolerance = 1e-4;  ///< Ipopt's tol
   /// End the horizon in the gap: y_N = w (the expert's fixed terminal
   /// lateral) and x_N between the follower's and target's safe distances.
   bool terminal_gap = true;

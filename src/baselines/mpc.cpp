@@ -266,11 +266,18 @@ MpcResult solve_mpc(MpcSolver& solver, const Scenario& scene, const Config& conf
   const auto start = std::chrono::steady_clock::now();
   MpcResult result;
   MpcPlan start_from = guess;
+  // Under a deadline of work the step's iterations are its budget, shared
+  // by its solves, as the wall time is under a deadline of wall time.
+  const bool work = config.closed_loop.deadline == Deadline::Work;
+  int iterations_left = work ? config.mpc.step_iterations : config.mpc.max_iterations;
   for (int round = 0; round < 2; ++round) {
-    const double left_ms = config.mpc.time_limit_ms - milliseconds_since(start);
+    const double left_ms = step_wall_limit_ms(config.closed_loop, config.mpc.time_limit_ms) -
+                           milliseconds_since(start);
     MpcProblemData data = build_mpc_problem(scene, config, start_from);
     const MpcProblemData unsolved = data;
-    result = solver.solve(std::move(data), start_from, left_ms);
+    result = solver.solve(std::move(data), start_from, left_ms,
+                          std::max(1, std::min(iterations_left, config.mpc.max_iterations)));
+    if (work) iterations_left -= result.iterations;
     if (result.status != MpcStatus::Solved) return result;
     if (clearance_violation(unsolved, result.plan, unsolved.pruned) <= kClearanceTolerance) {
       return result;
@@ -292,7 +299,8 @@ MpcSolver::~MpcSolver() {
   app_ = nullptr;
 }
 
-MpcResult MpcSolver::solve(MpcProblemData data, MpcPlan guess, double time_limit_ms) {
+MpcResult MpcSolver::solve(MpcProblemData data, MpcPlan guess, double time_limit_ms,
+                           int max_iterations) {
   MpcResult result;
   const double shortest_gap = data.gap_front - data.gap_rear - data.target_headway * data.v.lo;
   if (data.terminal_gap && shortest_gap < 0.0) {
@@ -307,6 +315,7 @@ MpcResult MpcSolver::solve(MpcProblemData data, MpcPlan guess, double time_limit
   nlp_->set_deadline(start +
                      std::chrono::microseconds(static_cast<long long>(time_limit_ms * 1000.0)));
   set_option(*app_->Options(), "max_cpu_time", std::max(time_limit_ms, 1.0) / 1000.0);
+  set_option(*app_->Options(), "max_iter", max_iterations);
   const Ipopt::ApplicationReturnStatus status = app_->OptimizeTNLP(nlp_);
   result.solve_ms = milliseconds_since(start);
   result.status = status_of(status);

@@ -58,7 +58,9 @@ class MpcSolver {
   ~MpcSolver();
   MpcSolver(const MpcSolver&) = delete;
   MpcSolver& operator=(const MpcSolver&) = delete;
-  [[nodiscard]] MpcResult solve(MpcProblemData data, MpcPlan guess, double time_limit_ms);
+  /// Stops at `time_limit_ms` of wall time or `max_iterations` Ipopt iterations.
+  [[nodiscard]] MpcResult solve(MpcProblemData data, MpcPlan guess, double time_limit_ms,
+                                int max_iterations);
 
  private:
   MpcSettings settings_;

@@ -1,5 +1,6 @@
 #include "lanechange/config.hpp"
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <numbers>
@@ -14,9 +15,20 @@ void require(bool ok, const char* field, const char* problem) {
   if (!ok) throw InputError(field, problem);
 }
 
+}  // namespace
+
+double step_wall_limit_ms(const ClosedLoopSettings& c, double own_ms) {
+  constexpr double kGuardBudgets = 10.0;
+  return c.deadline == Deadline::WallClock ? own_ms
+                                           : std::max(own_ms, kGuardBudgets * c.step_budget_ms);
+}
+
+namespace {
+
 void validate_closed_loop(const ClosedLoopSettings& c) {
   require(c.settle_time >= 0, "closed_loop.settle_time", "must not be negative");
   require(c.step_budget_ms > 0, "closed_loop.step_budget_ms", "must be positive");
+  require(c.step_qp_iterations > 0, "closed_loop.step_qp_iterations", "must be positive");
   require(c.replan_period >= 1, "closed_loop.replan_period", "must be at least 1");
   require(c.min_horizon > 0, "closed_loop.min_horizon", "must be positive");
   require(c.stale_plan_steps >= 0, "closed_loop.stale_plan_steps", "must not be negative");
@@ -76,6 +88,7 @@ void validate_mpc(const MpcSettings& m) {
   require(std::isfinite(m.time_limit_ms) && m.time_limit_ms > 0, "mpc.time_limit_ms",
           "must be positive");
   require(m.max_iterations >= 1, "mpc.max_iterations", "must be at least 1");
+  require(m.step_iterations >= 1, "mpc.step_iterations", "must be at least 1");
   require(std::isfinite(m.tolerance) && m.tolerance > 0, "mpc.tolerance", "must be positive");
   require(std::isfinite(m.gate_distance) && m.gate_distance >= 0, "mpc.gate_distance",
           "must not be negative");

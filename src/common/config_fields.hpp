@@ -37,10 +37,16 @@ inline constexpr std::array<detail::EnumName<HorizonMode>, 2> enum_names(Horizon
   return {{{HorizonMode::Receding, "receding"}, {HorizonMode::Shrinking, "shrinking"}}};
 }
 
+inline constexpr std::array<detail::EnumName<Deadline>, 2> enum_names(Deadline) {
+  return {{{Deadline::Work, "work"}, {Deadline::WallClock, "wall_clock"}}};
+}
+
 template <class V, class S>
 void visit_fields(V& v, S& s) requires std::same_as<std::remove_const_t<S>, ClosedLoopSettings> {
   v("settle_time", s.settle_time);
   v("step_budget_ms", s.step_budget_ms);
+  v("deadline", s.deadline);
+  v("step_qp_iterations", s.step_qp_iterations);
   v("replan_period", s.replan_period);
   v("horizon_mode", s.horizon_mode);
   v("monotone_lateral", s.monotone_lateral);
@@ -177,6 +183,7 @@ void visit_fields(V& v, S& s) requires std::same_as<std::remove_const_t<S>, MpcS
   v("margin", s.margin);
   v("time_limit_ms", s.time_limit_ms);
   v("max_iterations", s.max_iterations);
+  v("step_iterations", s.step_iterations);
   v("tolerance", s.tolerance);
   v("terminal_gap", s.terminal_gap);
   v("gate_distance", s.gate_distance);

@@ -202,6 +202,7 @@ std::uint64_t coin_seed(std::uint64_t scene_seed, std::uint64_t scene_index) {
 
 Config untimed(const Config& config) {
   Config out = config;
+  out.closed_loop.deadline = Deadline::WallClock;
   out.closed_loop.step_budget_ms = 1e12;
   return out;
 }

@@ -669,6 +669,7 @@ class Search {
   [[nodiscard]] double seconds_so_far() const {
     return std::chrono::duration<double>(Clock::now() - start_).count();
   }
+  [[nodiscard]] bool out_of_work() const { return ws_.iterations > settings_.qp_iteration_limit; }
   /// Nodes whose bound reaches this are pruned: the incumbent's gap, or the
   /// caller's cutoff while no incumbent beats it.
   [[nodiscard]] double prune_level() const {
@@ -710,7 +711,8 @@ void Search::find_incumbent(const NodeOutcome& root, const SolveHints& hints) {
   // Out of time, the search returns at once: the heuristics must not run on
   // past the limit either (a real-time step budget).
   auto settled = [&] {
-    return root_bound >= prune_level() || seconds_so_far() > settings_.time_limit_s;
+    return root_bound >= prune_level() || seconds_so_far() > settings_.time_limit_s ||
+           out_of_work();
   };
   auto accept = [this](NodeOutcome& o) { this->accept(o); };
   std::vector<std::pair<double, std::vector<int>>> starts;
@@ -759,14 +761,17 @@ bool Search::branch_and_bound(const std::vector<int>& root_modes, NodeOutcome ro
   return true;
 }
 
-// False while the time and the nodes last. At a limit the solution takes the
+// False while the time, the work and the nodes last. At a limit the solution takes the
 // incumbent and the least bound of the nodes left (`pending_bound` for one
 // not yet on the stack): no completion of theirs is cheaper.
 bool Search::stopped_at_limit(double pending_bound) {
   const double elapsed = seconds_so_far();
   const bool out_of_time = elapsed > settings_.time_limit_s;
-  if (!out_of_time && out_.nodes < settings_.node_limit) return false;
-  out_.status = out_of_time ? MiqpStatus::TimeLimit : MiqpStatus::NodeLimit;
+  const bool spent = out_of_work();
+  if (!out_of_time && !spent && out_.nodes < settings_.node_limit) return false;
+  out_.status = out_of_time ? MiqpStatus::TimeLimit
+                : spent     ? MiqpStatus::WorkLimit
+                            : MiqpStatus::NodeLimit;
   out_.solve_ms = elapsed * 1000.0;
   out_.qp_iterations = ws_.iterations;
   if (out_.has_solution()) out_.modes = modes_of(qp_, out_.path);

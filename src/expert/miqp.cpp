@@ -143,6 +143,7 @@ std::string_view to_string(MiqpStatus status) {
     case MiqpStatus::Infeasible: return "Infeasible";
     case MiqpStatus::TimeLimit: return "TimeLimit";
     case MiqpStatus::NodeLimit: return "NodeLimit";
+    case MiqpStatus::WorkLimit: return "WorkLimit";
     case MiqpStatus::NumericalError: return "NumericalError";
     case MiqpStatus::InvalidProblem: return "InvalidProblem";
     case MiqpStatus::Cutoff: return "Cutoff";

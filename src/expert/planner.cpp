@@ -17,6 +17,7 @@ std::string_view to_string(PlanStatus status) {
     case PlanStatus::Cycling: return "cycling";
     case PlanStatus::Infeasible: return "infeasible";
     case PlanStatus::TimeLimit: return "time_limit";
+    case PlanStatus::WorkLimit: return "work_limit";
     case PlanStatus::SolverError: return "solver_error";
   }
   return "?";
@@ -55,6 +56,7 @@ PlanStatus status_of_failed_round(MiqpStatus s) {
   switch (s) {
     case MiqpStatus::Infeasible: return PlanStatus::Infeasible;
     case MiqpStatus::TimeLimit: return PlanStatus::TimeLimit;
+    case MiqpStatus::WorkLimit: return PlanStatus::WorkLimit;
     default: return PlanStatus::SolverError;
   }
 }
@@ -79,6 +81,8 @@ struct RoundContext {
   LaneChangeWorkspace* workspace;
   Clock::time_point start;
   double time_limit_s;
+  long qp_iteration_limit;
+  long* qp_iterations_spent;  ///< by the plan's rounds so far
   int predicted_steps;
   double dt;
   const std::vector<int>* first_modes;  ///< lane modes to try first in round 1 (or none)
@@ -200,8 +204,10 @@ GapSolve solve_gap(const RoundContext& c, const Gap& gap, const Iterate& point, 
   const std::vector<int> mode_hint = mode_hint_for(c, result, out.qp, point);
   MiqpSettings settings;
   settings.time_limit_s = c.time_limit_s - elapsed_ms(c.start) / 1000.0;
+  settings.qp_iteration_limit = c.qp_iteration_limit - *c.qp_iterations_spent;
   settings.objective_cutoff = cutoff;
   out.solution = c.solver.solve(out.qp, settings, {c.workspace, &mode_hint, &point.controls});
+  *c.qp_iterations_spent += out.solution.qp_iterations;
   return out;
 }
 
@@ -227,6 +233,12 @@ RoundSolution solve_round(const RoundContext& c, const Iterate& point, double ra
     // A round begun past the limit would overrun it by a whole MIQP.
     best.solution.status = MiqpStatus::TimeLimit;
     best.solution.message = "no time left for the round";
+    return best;
+  }
+  if (*c.qp_iterations_spent >= c.qp_iteration_limit) {
+    best.solution.status = MiqpStatus::WorkLimit;
+    best.solution.message = "the plan's " + std::to_string(c.qp_iteration_limit) +
+                            " interior-point iterations are spent";
     return best;
   }
   const TrafficPrediction base = result.prediction;
@@ -493,12 +505,15 @@ ExpertResult ExpertPlanner::plan(const Scenario& scenario, const PlanLimits& lim
   LaneChangeWorkspace* workspace = hints.workspace == nullptr ? owned.get() : hints.workspace;
   const auto nodes = static_cast<std::size_t>(scenario.steps) + 1;
   const bool modes_fit = hints.modes != nullptr && hints.modes->size() == nodes;
+  long qp_iterations_spent = 0;
   const RoundContext context{scenario,
                              config,
                              *solver_,
                              workspace,
                              start,
                              limits.time_limit_s,
+                             limits.qp_iterations,
+                             &qp_iterations_spent,
                              predicted_steps_of(scenario, config),
                              dt,
                              modes_fit ? hints.modes : nullptr,

@@ -112,8 +112,11 @@ std::string MiqpSession::replan(const Observation& o) {
     workspace_step_ = o.step;
     hints.workspace = workspace_.get();
   }
-  const ExpertResult result = plan_function_(
-      scene, {std::max(0.0, config_.closed_loop.step_budget_ms - kStepReserveMs) / 1000.0}, hints);
+  const ClosedLoopSettings& loop = config_.closed_loop;
+  expert::PlanLimits limits{
+      std::max(0.0, step_wall_limit_ms(loop, loop.step_budget_ms) - kStepReserveMs) / 1000.0};
+  if (loop.deadline == Deadline::Work) limits.qp_iterations = loop.step_qp_iterations;
+  const ExpertResult result = plan_function_(scene, limits, hints);
   last_plan_ms_ = result.total_ms;
   last_status_ = result.status;
   if (result.status != PlanStatus::Converged) {

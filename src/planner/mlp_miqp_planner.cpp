@@ -191,9 +191,10 @@ Decision MlpMiqpSession::refused(const Observation& o) {
   }
   Decision d = expert_.act(o);
   if (d.status != ActStatus::Planned) {
-    // A check cut short by its time limit decided nothing: the next step's
+    // A check cut short by its budget decided nothing: the next step's
     // scene, a step shorter, is checked at once.
-    const bool undecided = expert_.last_status() == expert::PlanStatus::TimeLimit;
+    const bool undecided = expert_.last_status() == expert::PlanStatus::TimeLimit ||
+                           expert_.last_status() == expert::PlanStatus::WorkLimit;
     next_check_ = o.step + (undecided ? 1 : period);
     d.reason = refusal + "; the expert's check agrees (" + d.reason + ")";
     return d;

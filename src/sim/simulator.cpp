@@ -90,7 +90,12 @@ class Loop {
     record.status = d.status;
     record.decided = d.status;
     record.reason = d.reason;
-    if (record.compute_ms > config_.closed_loop.step_budget_ms && d.status != ActStatus::Failed) {
+    const bool overruled = config_.closed_loop.deadline == Deadline::WallClock;
+    if (record.compute_ms > config_.closed_loop.step_budget_ms && !overruled) {
+      // Under a deadline of work the decision stands: marked, not overruled.
+      record.overrun = true;
+    } else if (record.compute_ms > config_.closed_loop.step_budget_ms &&
+               d.status != ActStatus::Failed) {
       record.overrun = true;
       record.status = ActStatus::Failed;
       record.reason = "over its budget of " + std::to_string(config_.closed_loop.step_budget_ms) +

@@ -621,6 +621,38 @@ TEST(Planner, ARoundBegunPastTheTimeLimitIsNotSolved) {
   EXPECT_GE(solver->solves, 2);
 }
 
+// A budget of work binds at the same point on any machine: the plan stops
+// once its node QPs have spent the interior-point iterations it was given
+// (at most one QP's iterations beyond), and a rerun stops where it did.
+TEST(Planner, ABudgetOfWorkStopsThePlanAtTheSamePointEveryTime) {
+  const Config config;
+  const ScenarioSampler sampler(config, 2026);
+  const ExpertPlanner planner(config, std::make_shared<FastLaneChangeSolver>());
+  const Scenario s = sampler.sample(0);
+  const ExpertResult full = planner.plan(s);
+  ASSERT_EQ(full.status, PlanStatus::Converged) << full.reason;
+  long spent = 0;
+  for (const RoundReport& r : full.rounds) spent += r.qp_iterations;
+  ASSERT_GT(spent, 200);
+  PlanLimits limits;
+  limits.qp_iterations = spent / 2;
+  const ExpertResult cut = planner.plan(s, limits);
+  EXPECT_EQ(cut.status, PlanStatus::WorkLimit) << cut.reason;
+  long cut_spent = 0;
+  for (const RoundReport& r : cut.rounds) cut_spent += r.qp_iterations;
+  EXPECT_LE(cut_spent, limits.qp_iterations + QpSettings{}.max_iterations);
+  const ExpertResult again = planner.plan(s, limits);
+  EXPECT_EQ(again.status, cut.status);
+  EXPECT_EQ(again.rounds.size(), cut.rounds.size());
+  EXPECT_EQ(again.rounds.back().nodes, cut.rounds.back().nodes);
+  EXPECT_EQ(again.path.states.size(), cut.path.states.size());
+  // A budget the plan does not reach changes nothing.
+  limits.qp_iterations = spent + 1;
+  const ExpertResult roomy = planner.plan(s, limits);
+  EXPECT_EQ(roomy.status, PlanStatus::Converged);
+  EXPECT_DOUBLE_EQ(roomy.objective, full.objective);
+}
+
 // Out of time, the search stops after the root relaxation: the incumbent
 // heuristics (hinted modes, moved switches) no longer run past the limit.
 TEST(FastSolver, OutOfTimeTheIncumbentSearchDoesNotStart) {

@@ -176,12 +176,12 @@ inline CommandResult run_cli_on_ranks(int ranks, const std::string& args) {
 
 inline bool mpirun_available() { return std::system("command -v mpirun > /dev/null 2>&1") == 0; }
 
-/// The default config with a closed-loop step budget that never binds: under
-/// the sanitizers a re-plan can take longer than the 100 ms control period,
-/// and an overrun hands the step to the fallback, which would make outcomes
-/// depend on the machine.
+/// The default config with no step budget at all: neither the wall clock
+/// (under the sanitizers a re-plan can take longer than the 100 ms control
+/// period) nor the expert's budget of work binds.
 inline Config untimed_config() {
   Config c;
+  c.closed_loop.deadline = Deadline::WallClock;
   c.closed_loop.step_budget_ms = 1e9;
   return c;
 }
@@ -189,7 +189,7 @@ inline Config untimed_config() {
 /// untimed_config() as a file for the CLI, in `dir`; returns its path.
 inline std::string untimed_config_file(const TempDir& dir) {
   const std::string path = dir.file("untimed.json");
-  write_text(path, R"({"closed_loop": {"step_budget_ms": 1e9}})");
+  write_text(path, R"({"closed_loop": {"deadline": "wall_clock", "step_budget_ms": 1e9}})");
   return path;
 }
 

@@ -181,6 +181,7 @@ TEST(ClosedLoop, IdmFollowerBrakesForAnEgoThatCutsIn) {
 
 TEST(ClosedLoop, AThrowingOrSlowPlannerIsRecordedAndTheFallbackActs) {
   Config config;
+  config.closed_loop.deadline = Deadline::WallClock;
   config.closed_loop.step_budget_ms = 5.0;
   const Scenario s = open_road();
   const ScriptedPlanner bad([](const Observation& o) -> Decision {
@@ -202,10 +203,29 @@ TEST(ClosedLoop, AThrowingOrSlowPlannerIsRecordedAndTheFallbackActs) {
   EXPECT_NEAR(r.trajectory.controls[0].omega, s.limits.omega.hi, 1e-12);
 }
 
+// Under a deadline of work the outcome must not depend on the machine: a
+// step over the wall-clock budget is marked, and its decision stands.
+TEST(ClosedLoop, UnderADeadlineOfWorkASlowStepIsMarkedAndItsDecisionStands) {
+  Config config;
+  ASSERT_EQ(config.closed_loop.deadline, Deadline::Work);
+  config.closed_loop.step_budget_ms = 5.0;
+  const ScriptedPlanner slow([](const Observation& o) -> Decision {
+    if (o.step == 2) std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    return {{0.5, 0.0}, ActStatus::Planned, ""};
+  });
+  const sim::Rollout r = sim::simulate(open_road(), slow, config, {1.0});
+  ASSERT_TRUE(r.steps[2].overrun);
+  EXPECT_EQ(r.steps[2].status, ActStatus::Planned);
+  EXPECT_EQ(r.metrics.overruns, 1);
+  EXPECT_EQ(r.metrics.failures, 0);
+  EXPECT_DOUBLE_EQ(r.trajectory.controls[2].a, 0.5);
+}
+
 // A take-over whose first plan overran its budget was still made at that
 // step: the count and its time must not depend on the machine's load.
 TEST(ClosedLoop, ATakeOverCountsWhereItWasDecidedEvenIfItsStepOverran) {
   Config config;
+  config.closed_loop.deadline = Deadline::WallClock;
   config.closed_loop.step_budget_ms = 5.0;
   const ScriptedPlanner taking_over([](const Observation& o) -> Decision {
     if (o.step == 0) std::this_thread::sleep_for(std::chrono::milliseconds(20));

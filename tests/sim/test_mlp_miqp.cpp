@@ -146,6 +146,7 @@ TEST(MlpMiqp, ARefusalCheckCutShortByItsTimeLimitIsRepeatedAtOnce) {
   auto checks_in_first_steps = [&s](double budget_ms) {
     Config config = testing::untimed_config();
     config.closed_loop.step_budget_ms = budget_ms;
+    config.closed_loop.deadline = Deadline::WallClock;
     int calls = 0;
     const MlpMiqpPlanner p(
         config, [](const Scenario&) { return static_cast<int>(Label::Failure); },

@@ -44,10 +44,12 @@ struct MiqpProblem {
 };
 
 enum class MiqpStatus {
-  Optimal,         ///< proven optimal within the gap tolerances
-  Infeasible,      ///< proven infeasible
-  TimeLimit,       ///< stopped by the time limit; x is the best point found, if any
-  NodeLimit,       ///< stopped by the node limit; x is the best point found, if any
+  Optimal,     ///< proven optimal within the gap tolerances
+  Infeasible,  ///< proven infeasible
+  TimeLimit,   ///< stopped by the time limit; x is the best point found, if any
+  NodeLimit,   ///< stopped by the node limit; x is the best point found, if any
+  /// Stopped by MiqpSettings::qp_iteration_limit; x is the best point found, if any.
+  WorkLimit,
   NumericalError,  ///< the back-end failed; message says why
   InvalidProblem,  ///< check() failed; nothing was solved
   /// Stopped once its lower bound passed MiqpSettings::objective_cutoff; the
@@ -60,6 +62,11 @@ enum class MiqpStatus {
 struct MiqpSettings {
   double time_limit_s = 600.0;
   long node_limit = 10'000'000;
+  /// Interior-point iterations of the node QPs over the whole solve: a
+  /// budget of work, so that where it binds the answer does not depend on
+  /// the machine's load. Honoured by our solvers (fast and fixed-mode);
+  /// Bonmin ignores it.
+  long qp_iteration_limit = std::numeric_limits<long>::max();
   double absolute_gap = 1e-9;
   double relative_gap = 1e-9;
   double integer_tolerance = 1e-6;

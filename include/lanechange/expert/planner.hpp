@@ -8,6 +8,7 @@
 // within the tolerance, or at the round limit. Where those rounds fail (a
 // cycle or the limit), config.expert.globalisation may go on with rounds kept
 // within a trust region of the last solution (docs/expert.md).
+#include <limits>
 #include <memory>
 #include <optional>
 #include <string>
@@ -27,6 +28,7 @@ enum class PlanStatus {
   Cycling,         ///< the rounds alternate between two paths (config.expert.cycle_tolerance)
   Infeasible,      ///< a round's MIQP has no solution: no safe lane change exists
   TimeLimit,       ///< the time limit came first
+  WorkLimit,       ///< the budget of interior-point iterations came first
   SolverError,     ///< the back-end failed
 };
 [[nodiscard]] std::string_view to_string(PlanStatus status);
@@ -63,6 +65,9 @@ struct ExpertResult {
 
 struct PlanLimits {
   double time_limit_s = 60.0;  ///< whole plan
+  /// Interior-point iterations over the whole plan: a deadline in work, the
+  /// same on any load (closed_loop.deadline).
+  long qp_iterations = std::numeric_limits<long>::max();
 };
 
 /// Where to start when a good guess is at hand (a re-plan in closed loop
