@@ -2,6 +2,7 @@
 // Seeded random scenarios (distribution in docs/scenarios.md). Scenario i of
 // a seed is drawn from its own sub-seed, so it is the same whichever worker,
 // thread or rank draws it and in whatever order.
+#include <array>
 #include <cstdint>
 #include <optional>
 
@@ -23,6 +24,11 @@ class Rng {
  private:
   std::uint64_t state_;
 };
+
+/// The behaviors the sampler draws, in the order of its draw (a replayed car
+/// needs a record, which only an imported scene has).
+inline constexpr std::array<Behavior, 3> kSampledBehaviors = {
+    Behavior::ConstantSpeed, Behavior::ConstantAccel, Behavior::Idm};
 
 /// The sub-seed of scenario `index` under `seed`.
 [[nodiscard]] std::uint64_t scenario_seed(std::uint64_t seed, std::uint64_t index);

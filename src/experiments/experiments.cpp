@@ -31,8 +31,6 @@ using nlohmann::json;
 
 namespace {
 
-const std::vector<Behavior> kBehaviors = {Behavior::ConstantSpeed, Behavior::ConstantAccel,
-                                          Behavior::Idm};
 // Learning and evaluation never share scenes: other seeds.
 constexpr std::uint64_t kDataSeed = 101;
 constexpr std::uint64_t kEvalSeed = 2026;
@@ -101,18 +99,18 @@ std::string path_in(const Context& c, const std::string& relative) {
 
 std::vector<std::string> per_behavior_dirs(const Context& c, const std::string& parent) {
   std::vector<std::string> dirs;
-  dirs.reserve(kBehaviors.size());
-  for (Behavior b : kBehaviors) dirs.push_back(path_in(c, parent + "/" + behavior_name(b)));
+  dirs.reserve(kSampledBehaviors.size());
+  for (Behavior b : kSampledBehaviors) dirs.push_back(path_in(c, parent + "/" + behavior_name(b)));
   return dirs;
 }
 
 void generate_sets(const Context& c, const std::string& parent, std::uint64_t seed,
                    long long count) {
-  for (std::size_t i = 0; i < kBehaviors.size(); ++i) {
+  for (std::size_t i = 0; i < kSampledBehaviors.size(); ++i) {
     data::GenerateOptions g;
     g.count = count;
     g.seed = seed_of(seed, i);
-    g.behavior = kBehaviors[i];
+    g.behavior = kSampledBehaviors[i];
     g.out_dir = per_behavior_dirs(c, parent)[i];
     g.shard_size = std::max<long long>(1, std::min<long long>(200, count / 4));
     g.config = c.options.config;
@@ -129,11 +127,11 @@ void generate_sets(const Context& c, const std::string& parent, std::uint64_t se
 
 void evaluate_sets(const Context& c, const std::string& parent, const Config& config,
                    const std::vector<std::string>& planners) {
-  for (std::size_t i = 0; i < kBehaviors.size(); ++i) {
+  for (std::size_t i = 0; i < kSampledBehaviors.size(); ++i) {
     sim::EvaluateOptions e;
     e.count = c.sizes.eval_per_behavior;
     e.seed = seed_of(kEvalSeed, i);
-    e.behavior = kBehaviors[i];
+    e.behavior = kSampledBehaviors[i];
     e.planners = planners;
     e.model_dir = path_in(c, "model");
     e.out_dir = per_behavior_dirs(c, parent)[i];
@@ -160,10 +158,10 @@ std::vector<sim::RolloutRow> read_all_rollouts(const Context& c, const std::stri
 }
 
 Scenario eval_scene(const Context& c, const std::string& behavior, long long index) {
-  for (std::size_t i = 0; i < kBehaviors.size(); ++i) {
-    if (behavior_name(kBehaviors[i]) != behavior) continue;
+  for (std::size_t i = 0; i < kSampledBehaviors.size(); ++i) {
+    if (behavior_name(kSampledBehaviors[i]) != behavior) continue;
     const ScenarioSampler sampler(c.options.config, seed_of(kEvalSeed, i));
-    return sampler.sample(static_cast<std::uint64_t>(index), kBehaviors[i]);
+    return sampler.sample(static_cast<std::uint64_t>(index), kSampledBehaviors[i]);
   }
   throw InputError("behavior", "unknown behavior " + behavior);
 }

@@ -4,12 +4,11 @@
 #include <sstream>
 
 #include "lanechange/plot.hpp"
+#include "lanechange/sampler.hpp"
 
 namespace lanechange::experiments {
 
 namespace {
-
-const std::vector<std::string> kBehaviors = {"constant_speed", "constant_accel", "idm"};
 
 std::string header(const std::string& png, const std::string& title) {
   return "set terminal pngcairo size 1000,520 font 'Sans,11'\nset output " + gnuplot_quoted(png) +
@@ -22,7 +21,8 @@ void plot_success_bars(const std::vector<sim::RolloutRow>& rows,
                        const std::vector<std::string>& planners, const std::string& png_path) {
   std::ostringstream data;
   data << "$success << EOD\n";
-  for (const auto& behavior : kBehaviors) {
+  for (const Behavior sampled : kSampledBehaviors) {
+    const std::string behavior(to_string(sampled));
     data << behavior;
     for (const auto& planner : planners) {
       long long n = 0;

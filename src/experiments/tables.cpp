@@ -8,6 +8,7 @@
 
 #include "lanechange/error.hpp"
 #include "lanechange/run/quantile.hpp"
+#include "lanechange/sampler.hpp"
 
 namespace lanechange::experiments {
 
@@ -26,7 +27,6 @@ const std::map<std::string, std::string> kPaperComparison = {
 const std::map<std::string, std::string> kPaperBehavior = {
     {"constant_speed", "88.75%"}, {"constant_accel", "85.17%"}, {"idm", "91.95%"}};
 constexpr double kPaperGeneralization = 22.0;
-const std::vector<std::string> kBehaviors = {"constant_speed", "constant_accel", "idm"};
 
 std::string fixed(double value, int digits) {
   if (!std::isfinite(value)) return "–";
@@ -272,7 +272,8 @@ Table behavior_table(const std::vector<sim::RolloutRow>& rows,
   Table t{{"behavior of the other cars"}, {}};
   for (const auto& planner : planners) t.header.push_back(planner);
   t.header.emplace_back("paper (MLP-MIQP)");
-  for (const auto& behavior : kBehaviors) {
+  for (const Behavior sampled : kSampledBehaviors) {
+    const std::string behavior(to_string(sampled));
     std::vector<std::string> row = {behavior};
     for (const auto& planner : planners) {
       const auto mine = of_planner(rows, planner, behavior);

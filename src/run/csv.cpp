@@ -1,5 +1,8 @@
 #include "run/csv.hpp"
 
+#include <cmath>
+#include <sstream>
+
 namespace lanechange::run {
 
 std::string csv_field(const std::string& text) {
@@ -12,6 +15,14 @@ std::string csv_field(const std::string& text) {
     quoted += c == '"' ? std::string("\"\"") : std::string(1, c);
   }
   return quoted + "\"";
+}
+
+std::string csv_number(double v, int significant_digits) {
+  if (!std::isfinite(v)) return "";
+  std::ostringstream out;
+  out.precision(significant_digits);
+  out << v;
+  return out.str();
 }
 
 }  // namespace lanechange::run

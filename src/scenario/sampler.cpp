@@ -33,8 +33,9 @@ ScenarioSampler::ScenarioSampler(Config config, std::uint64_t seed)
 Scenario ScenarioSampler::sample(std::uint64_t index, std::optional<Behavior> behavior) const {
   Rng rng(scenario_seed(seed_, index));
   // Draw every number, used or not, so that a scenario's cars do not depend on its behavior.
-  const int behavior_draw = static_cast<int>(rng.uniform(0.0, 3.0));
-  const Behavior b = behavior.value_or(static_cast<Behavior>(behavior_draw));
+  const auto behavior_draw =
+      static_cast<std::size_t>(rng.uniform(0.0, static_cast<double>(kSampledBehaviors.size())));
+  const Behavior b = behavior.value_or(kSampledBehaviors.at(behavior_draw));
   Scenario s = config_.sampler.target_lane_cars.hi > 0 ? dense(rng, b) : three_cars(rng, b);
   validate_scenario(s);
   return s;

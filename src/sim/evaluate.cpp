@@ -141,13 +141,9 @@ bool prepare(const EvaluateOptions& o, const json& parameters) {
   return false;
 }
 
-std::string number(double v) {
-  if (!std::isfinite(v)) return "";
-  std::ostringstream out;
-  out.precision(10);
-  out << v;
-  return out.str();
-}
+// Rollout rows are read back for the summary: ten digits keep them exact
+// enough that a resumed run summarises as an uninterrupted one.
+constexpr int kRolloutDigits = 10;
 
 // The id of the target-lane car behind or ahead of the ego at the end, or ""
 // where it did not end in the target lane or that side was empty.
@@ -177,7 +173,7 @@ std::string rollout_row(long long index, const Scenario& s, const std::string& p
         m.max_step_ms, m.first_takeover_t >= 0 ? m.first_takeover_t : NAN, m.forced_decel,
         m.max_car_decel, m.time_to_lane_line >= 0 ? m.time_to_lane_line : NAN}) {
     row += ',';
-    row += number(v);
+    row += run::csv_number(v, kRolloutDigits);
   }
   return row + "," + m.target_lane_slot + "," + gap_car(r, "behind") + "," + gap_car(r, "ahead") +
          "," + run::csv_field(r.reason) + "\n";

@@ -10,6 +10,7 @@
 #include "lanechange/error.hpp"
 #include "lanechange/run/quantile.hpp"
 #include "lanechange/sim/evaluate.hpp"
+#include "run/csv.hpp"
 #include "sim/evaluation_files.hpp"
 
 namespace lanechange::sim {
@@ -69,13 +70,7 @@ RolloutRow parse(const std::string& line) {
 
 using Row = RolloutRow;
 
-std::string number(double v) {
-  if (!std::isfinite(v)) return "";
-  std::ostringstream out;
-  out.precision(6);
-  out << v;
-  return out.str();
-}
+constexpr int kSummaryDigits = 6;
 
 std::string summary_row(const std::string& planner, const std::string& behavior,
                         const std::vector<const Row*>& rows) {
@@ -114,7 +109,7 @@ std::string summary_row(const std::string& planner, const std::string& behavior,
   std::string line = planner + "," + behavior;
   for (double c : cells) {
     line += ',';
-    line += number(c);
+    line += run::csv_number(c, kSummaryDigits);
   }
   return line + "\n";
 }
