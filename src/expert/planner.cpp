@@ -287,19 +287,26 @@ bool solved(const LaneChangeSolution& s) {
   return s.status == MiqpStatus::Optimal && s.has_solution();
 }
 
-void fail_round(ExpertResult& result, const LaneChangeSolution& solution) {
-  result.status = status_of_failed_round(solution.status);
-  result.reason = "round " + std::to_string(result.iterations()) + ": " +
-                  std::string(lanechange::expert::to_string(solution.status)) +
-                  (solution.message.empty() ? "" : " (" + solution.message + ")");
-}
-
 void adopt(ExpertResult& result, const RoundSolution& round) {
   result.gap = round.gap;
   result.path = round.solution.path;
   result.modes = round.solution.modes;
   result.occupancy = round.occupancy;
   result.objective = round.solution.objective;
+}
+
+// A round that fails ends the plan. One stopped by the plan's budget with
+// an incumbent leaves that as the plan's path (anytime): feasible for the
+// round's MIQP, if not proven optimal nor converged.
+void fail_round(ExpertResult& result, const RoundSolution& round) {
+  const LaneChangeSolution& solution = round.solution;
+  const bool budget =
+      solution.status == MiqpStatus::TimeLimit || solution.status == MiqpStatus::WorkLimit;
+  if (budget && solution.has_solution()) adopt(result, round);
+  result.status = status_of_failed_round(solution.status);
+  result.reason = "round " + std::to_string(result.iterations()) + ": " +
+                  std::string(lanechange::expert::to_string(solution.status)) +
+                  (solution.message.empty() ? "" : " (" + solution.message + ")");
 }
 
 // The paper's successive linearization. Returns with a final status, or with
@@ -317,7 +324,7 @@ void plain_rounds(const RoundContext& c, Iterate point, ExpertResult& result, It
     RoundReport report = report_of(solution);
     if (!solved(solution)) {
       result.rounds.push_back(report);
-      fail_round(result, solution);
+      fail_round(result, round_solution);
       return;
     }
     // A round converges when its solution lies within the tolerance of the
@@ -418,7 +425,7 @@ void trust_region_rounds(const RoundContext& c, ExpertResult& result, Iterate pr
         radius /= e.trust_shrink;
         continue;
       }
-      fail_round(result, solution);
+      fail_round(result, round_solution);
       return;
     }
     report.max_change = largest_position_change(solution.path, point);

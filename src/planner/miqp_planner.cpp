@@ -119,7 +119,9 @@ std::string MiqpSession::replan(const Observation& o) {
   const ExpertResult result = plan_function_(scene, limits, hints);
   last_plan_ms_ = result.total_ms;
   last_status_ = result.status;
-  if (result.status != PlanStatus::Converged) {
+  // A plan cut by its budget still drives with the best it found: the
+  // fallback is for steps with no safe plan at all.
+  if (result.status != PlanStatus::Converged && !result.cut_with_incumbent()) {
     return std::string(expert::to_string(result.status)) + ": " + result.reason;
   }
   plan_ = result.path;

@@ -638,6 +638,10 @@ TEST(Planner, ABudgetOfWorkStopsThePlanAtTheSamePointEveryTime) {
   limits.qp_iterations = spent / 2;
   const ExpertResult cut = planner.plan(s, limits);
   EXPECT_EQ(cut.status, PlanStatus::WorkLimit) << cut.reason;
+  // Anytime: the cut plan keeps the best path it found by then.
+  EXPECT_TRUE(cut.cut_with_incumbent());
+  EXPECT_EQ(cut.path.states.size(), full.path.states.size());
+  EXPECT_FALSE(full.cut_with_incumbent());
   long cut_spent = 0;
   for (const RoundReport& r : cut.rounds) cut_spent += r.qp_iterations;
   EXPECT_LE(cut_spent, limits.qp_iterations + QpSettings{}.max_iterations);

@@ -12,6 +12,7 @@
 #include "lanechange/sim/simulator.hpp"
 #include "lanechange/traffic.hpp"
 #include "lanechange/trajectory.hpp"
+#include "planner/miqp_planner.hpp"
 #include "rollout_checks.hpp"
 #include "test_helpers.hpp"
 
@@ -219,6 +220,40 @@ TEST(ClosedLoop, UnderADeadlineOfWorkASlowStepIsMarkedAndItsDecisionStands) {
   EXPECT_EQ(r.metrics.overruns, 1);
   EXPECT_EQ(r.metrics.failures, 0);
   EXPECT_DOUBLE_EQ(r.trajectory.controls[2].a, 0.5);
+}
+
+// Anytime: a re-plan cut by its budget drives with the incumbent it found;
+// only one that found nothing hands the step to the fallback.
+TEST(ClosedLoop, AReplanCutByItsBudgetDrivesWithItsIncumbent) {
+  const Scenario s = open_road();
+  const Config config;
+  auto cut = [](bool with_incumbent) {
+    return [with_incumbent](const Scenario& scene, const expert::PlanLimits&,
+                            const expert::PlanHints&) {
+      expert::ExpertResult r;
+      r.status = expert::PlanStatus::WorkLimit;
+      r.reason = "the plan's interior-point iterations are spent";
+      if (with_incumbent) {
+        r.path.states.assign(static_cast<std::size_t>(scene.steps) + 1, expert::State::Zero());
+        r.path.controls.assign(static_cast<std::size_t>(scene.steps), expert::Control(0.7, 0.0));
+      }
+      return r;
+    };
+  };
+  Observation o;
+  o.scene = &s;
+  o.ego = s.ego;
+  o.cars.assign(s.cars.size(), {});
+  for (CarIndex c = 0; c < s.car_count(); ++c) o.cars[c] = s.car(c);
+  planner::MiqpSession with(cut(true), config);
+  const Decision d = with.act(o);
+  EXPECT_EQ(d.status, ActStatus::Planned) << d.reason;
+  EXPECT_DOUBLE_EQ(d.control.a, 0.7);
+  EXPECT_EQ(with.last_status(), expert::PlanStatus::WorkLimit);
+  planner::MiqpSession without(cut(false), config);
+  const Decision none = without.act(o);
+  EXPECT_EQ(none.status, ActStatus::Fallback);
+  EXPECT_NE(none.reason.find("work_limit"), std::string::npos) << none.reason;
 }
 
 // A take-over whose first plan overran its budget was still made at that

@@ -47,7 +47,7 @@ struct RoundReport {
 struct ExpertResult {
   PlanStatus status = PlanStatus::SolverError;
   std::string reason;      ///< in words, for anything but Converged
-  Iterate path;            ///< the last round's solution (empty if none)
+  Iterate path;            ///< the last round's solution (empty if none); see cut_with_incumbent
   std::vector<int> modes;  ///< lane mode per node of the last solution
   /// What those modes mean: the lanes the ego may occupy at each node
   /// (nullopt where no lane rule applies, as at t = 0). It is the integer
@@ -61,6 +61,14 @@ struct ExpertResult {
   std::vector<RoundReport> rounds;
   double total_ms = 0.0;
   [[nodiscard]] int iterations() const { return static_cast<int>(rounds.size()); }
+  /// Stopped by its budget (TimeLimit or WorkLimit) with a path: the cut
+  /// round's incumbent, else the last round's solution. Feasible for its
+  /// round's MIQP, but neither proven optimal nor converged: an anytime
+  /// answer for a closed loop, never a label.
+  [[nodiscard]] bool cut_with_incumbent() const {
+    return (status == PlanStatus::TimeLimit || status == PlanStatus::WorkLimit) &&
+           !path.states.empty();
+  }
 };
 
 struct PlanLimits {
