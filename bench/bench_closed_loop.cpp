@@ -27,7 +27,8 @@ void run_planner(
     state.SkipWithError(e.what());
     return;
   }
-  config.closed_loop.step_budget_ms = 1e6;  // time every step, overrule none
+  // Time every step, overrule none; the budgets of work bind as in evaluate.
+  config.closed_loop.step_budget_ms = 1e6;
   config.closed_loop.lookahead_tolerance = lookahead_tolerance;
   lanechange::bench::run_closed_loop_steps(
       state, *lanechange::planner::make_planner(name, config, model), config);

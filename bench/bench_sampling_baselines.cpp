@@ -10,7 +10,8 @@ namespace {
 
 void run_baseline(benchmark::State& state, const char* name) {
   lanechange::Config config;
-  config.closed_loop.step_budget_ms = 1e6;  // time every step, overrule none
+  // Time every step, overrule none; the budgets of work bind as in evaluate.
+  config.closed_loop.step_budget_ms = 1e6;
   lanechange::bench::run_closed_loop_steps(
       state, *lanechange::baselines::make_planner(name, config), config);
 }
