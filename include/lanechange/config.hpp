@@ -197,7 +197,7 @@ enum class HorizonMode {
 
 /// What bounds a planner's step in closed loop (docs/closed_loop.md).
 enum class Deadline {
-  /// Budgets of work (closed_loop.step_qp_iterations, mpc.max_iterations),
+  /// Budgets of work (closed_loop.step_qp_iterations, mpc.step_iterations),
   /// sized to fit step_budget_ms on the reference machine: the same command
   /// gives the same outcomes on any load. A step over step_budget_ms of wall
   /// time is counted as an overrun, and its decision stands.
@@ -214,7 +214,7 @@ struct ClosedLoopSettings {
   double step_budget_ms = 100.0;  ///< the step's deadline (see deadline)
   Deadline deadline = Deadline::Work;
   /// The expert's interior-point iterations per step under Deadline::Work:
-  /// about 80 ms on the reference machine (docs/closed_loop.md).
+  /// the slowest step about 90 ms on the reference machine (docs/closed_loop.md).
   int step_qp_iterations = 2500;
   int replan_period = 1;  ///< the expert re-plans every this many steps
   /// Shrinking: a receding plan keeps putting the crossing off to its end

@@ -64,7 +64,7 @@ struct ExpertResult {
   /// Stopped by its budget (TimeLimit or WorkLimit) with a path: the cut
   /// round's incumbent, else the last round's solution. Feasible for its
   /// round's MIQP, but neither proven optimal nor converged: an anytime
-  /// answer for a closed loop, never a label.
+  /// answer for a closed loop; to_trajectory still labels it failure.
   [[nodiscard]] bool cut_with_incumbent() const {
     return (status == PlanStatus::TimeLimit || status == PlanStatus::WorkLimit) &&
            !path.states.empty();
