@@ -90,17 +90,15 @@ class Loop {
     record.status = d.status;
     record.decided = d.status;
     record.reason = d.reason;
-    const bool overruled = config_.closed_loop.deadline == Deadline::WallClock;
-    if (record.compute_ms > config_.closed_loop.step_budget_ms && !overruled) {
+    if (record.compute_ms > config_.closed_loop.step_budget_ms && d.status != ActStatus::Failed) {
+      record.overrun = true;
       // Under a deadline of work the decision stands: marked, not overruled.
-      record.overrun = true;
-    } else if (record.compute_ms > config_.closed_loop.step_budget_ms &&
-               d.status != ActStatus::Failed) {
-      record.overrun = true;
-      record.status = ActStatus::Failed;
-      record.reason = "over its budget of " + std::to_string(config_.closed_loop.step_budget_ms) +
-                      " ms; the fallback acted" +
-                      (d.reason.empty() ? "" : " (the planner: " + d.reason + ")");
+      if (config_.closed_loop.deadline == Deadline::WallClock) {
+        record.status = ActStatus::Failed;
+        record.reason = "over its budget of " + std::to_string(config_.closed_loop.step_budget_ms) +
+                        " ms; the fallback acted" +
+                        (d.reason.empty() ? "" : " (the planner: " + d.reason + ")");
+      }
     }
     if (record.status == ActStatus::Failed) return planner::fallback_control(keeper_, o);
     return d.control;
