@@ -23,6 +23,7 @@ struct GenerateArgs {
   int steps = 0;
   long long shard_size = 200;
   double time_limit = 60.0;
+  bool gap_labels = false;
 };
 
 data::GenerateOptions to_options(const GenerateArgs& a, const ConfigSource& global_config) {
@@ -34,6 +35,7 @@ data::GenerateOptions to_options(const GenerateArgs& a, const ConfigSource& glob
   o.solver = a.solver;
   o.shard_size = a.shard_size;
   o.time_limit_s = a.time_limit;
+  o.gap_labels = a.gap_labels;
   o.config = global_config();
   if (a.steps > 0) o.config.expert.steps = a.steps;
   return o;
@@ -84,6 +86,8 @@ void add_generate(CLI::App& app, const ConfigSource& config) {
       ->check(CLI::Range(2, 10000));
   cmd->add_option("--shard-size", a->shard_size, "Scenarios per shard file");
   cmd->add_option("--time-limit", a->time_limit, "Seconds per plan");
+  cmd->add_flag("--gap-labels", a->gap_labels,
+                "Also label each gap around the ego, planned alone (a plan per gap)");
   cmd->callback([a, config] {
     run_generate(*a, [&] { return with_target_lane_cars(config(), a->target_lane_cars); });
   });

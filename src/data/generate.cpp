@@ -128,6 +128,7 @@ json dataset_parameters(const GenerateOptions& o) {
           {"shard_size", o.shard_size},
           {"solver", o.solver},
           {"time_limit_s", o.time_limit_s},
+          {"gap_labels", o.gap_labels},
           {"config", config}};
 }
 
@@ -150,7 +151,8 @@ GenerateReport generate(const GenerateOptions& options, const RunOptions& run) {
                                                 options.solver, options.config.expert.big_m);
   const ScenarioSampler sampler(options.config, options.seed);
   const expert::ExpertPlanner planner(options.config, solver);
-  const ShardMaker maker{sampler, planner, options.behavior, options.seed, options.time_limit_s};
+  const ShardMaker maker{
+      sampler, planner, options.behavior, options.seed, options.time_limit_s, options.gap_labels};
   run::Progress progress(run.progress, run.progress_on_terminal, scenarios_in(todo));
   run_workers(maker, todo, options.out_dir, jobs, progress);
   progress.finish();

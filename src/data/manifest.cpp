@@ -24,9 +24,13 @@ std::string manifest_path(const std::string& dir) {
 }
 
 json columns_block() {
-  return {{"scenarios", scenario_columns()},  {"samples", sample_columns()},
-          {"timing", timing_columns()},       {"classifier_features", classifier_features()},
-          {"action_inputs", action_inputs()}, {"action_targets", action_targets()}};
+  return {{"scenarios", scenario_columns()},
+          {"samples", sample_columns()},
+          {"timing", timing_columns()},
+          {"classifier_features", classifier_features()},
+          {"gap_classifier_features", gap_classifier_features()},
+          {"action_inputs", action_inputs()},
+          {"action_targets", action_targets()}};
 }
 
 void write_manifest(const std::string& dir, const json& manifest) {
@@ -101,7 +105,9 @@ json read_manifest(const std::string& dir) {
     throw InputError("", dir + " has no " + std::string(kManifestName) + ": not a data set");
   }
   json manifest = lanechange::detail::read_json_file(manifest_path(dir));
-  if (!manifest.is_object() || manifest.value("format", std::string()) != kDatasetFormat ||
+  // Format 2 lacks only the gap columns, which nothing requires: it still reads.
+  const std::string format = manifest.is_object() ? manifest.value("format", std::string()) : "";
+  if ((format != kDatasetFormat && format != "lanechange.dataset/2") ||
       !manifest.contains("parameters") || !manifest["parameters"].is_object()) {
     throw InputError("",
                      manifest_path(dir) + " is not a " + std::string(kDatasetFormat) + " manifest");

@@ -1,5 +1,6 @@
 #include "data/rows.hpp"
 
+#include <algorithm>
 #include <array>
 #include <charconv>
 #include <cmath>
@@ -92,6 +93,41 @@ void put_samples(std::string& out, std::uint64_t index, const Scenario& scenario
   }
 }
 
+bool is_scene_column(const std::string& name) {
+  const auto& scene = scene_columns();
+  return std::find(scene.begin(), scene.end(), name) != scene.end();
+}
+
+// The gap columns of the scenarios file: the features, the plan's gap (its
+// slot, and the ids of the cars framing it), the label of each slot's gap.
+const std::vector<std::string>& gap_columns() {
+  static const std::vector<std::string> columns = [] {
+    std::vector<std::string> c;
+    for (const std::string& name : expert::gap_feature_names()) {
+      if (!is_scene_column(name)) c.push_back(name);
+    }
+    c.insert(c.end(), {"gap_slot", "gap_behind", "gap_ahead"});
+    for (int slot = 0; slot < expert::kGapSlots; ++slot) {
+      c.push_back("gap_" + std::string(expert::gap_slot_name(slot)) + "_label");
+    }
+    return c;
+  }();
+  return columns;
+}
+
+void put_gaps(std::string& out, const Scenario& s, const PlanOutcome& outcome) {
+  // The features the scene columns hold already (the ego's) are not repeated.
+  const std::vector<double> features = expert::gap_features(s, expert::gap_slots(s));
+  for (std::size_t i = 0; i < features.size(); ++i) {
+    if (!is_scene_column(expert::gap_feature_names()[i])) put(out, features[i]);
+  }
+  out += ',';
+  if (outcome.gap_slot >= 0) out += expert::gap_slot_name(outcome.gap_slot);
+  put(out, outcome.gap_behind);
+  put(out, outcome.gap_ahead);
+  for (const auto& label : outcome.slot_labels) put(out, label ? to_string(*label) : "");
+}
+
 const std::vector<std::string>& traffic_columns() {
   static const std::vector<std::string> columns = {"leader_x",   "leader_v",   "leader_a",
                                                    "follower_x", "follower_v", "follower_a",
@@ -104,9 +140,12 @@ const std::vector<std::string>& traffic_columns() {
 std::vector<std::string> scenario_columns() {
   std::vector<std::string> c = {"index", "sub_seed", "behavior"};
   c.insert(c.end(), scene_columns().begin(), scene_columns().end());
+  c.insert(c.end(), {"label", "status", "collision", "objective", "iterations", "samples"});
+  // Format 3 adds the scene through its gap slots, the gap the plan takes and
+  // the label through each slot's gap, before the reason.
+  c.insert(c.end(), gap_columns().begin(), gap_columns().end());
   // The reason is last: it is the only field that may need quotes.
-  c.insert(c.end(),
-           {"label", "status", "collision", "objective", "iterations", "samples", "reason"});
+  c.emplace_back("reason");
   return c;
 }
 
@@ -139,6 +178,8 @@ std::vector<std::string> action_inputs() {
 
 std::vector<std::string> action_targets() { return {"a", "omega"}; }
 
+std::vector<std::string> gap_classifier_features() { return expert::gap_feature_names(); }
+
 ScenarioRows header_rows() {
   return {join(scenario_columns()), join(sample_columns()), join(timing_columns())};
 }
@@ -158,6 +199,7 @@ ScenarioRows scenario_rows(std::uint64_t index, std::uint64_t sub_seed, const Sc
   put(out, outcome.objective);
   put(out, static_cast<std::uint64_t>(outcome.iterations));
   put(out, static_cast<std::uint64_t>(outcome.trajectory.nodes()));
+  put_gaps(out, scenario, outcome);
   put(out, run::csv_field(outcome.reason));
   out += '\n';
   put_samples(rows.samples, index, scenario, scene, outcome);

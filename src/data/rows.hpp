@@ -2,10 +2,13 @@
 // The CSV rows of a shard (docs/dataset.md). Numbers are written in their
 // shortest exact form (std::to_chars), so a file is the same on every run and
 // a reader gets the very doubles we had.
+#include <array>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
+#include "lanechange/expert/gap_slots.hpp"
 #include "lanechange/scenario.hpp"
 #include "lanechange/trajectory.hpp"
 
@@ -24,6 +27,13 @@ struct PlanOutcome {
   /// Lanes the plan lets the ego occupy per node (-1 none, else the
   /// LaneOccupancy value); as long as the trajectory, or empty.
   std::vector<int> lane_modes;
+  /// The slot (expert::GapSlots) of the gap the plan takes: -1 without a
+  /// solution, or for a gap further out than the slots reach.
+  int gap_slot = -1;
+  std::string gap_behind, gap_ahead;  ///< ids of the cars framing it; empty where open
+  /// The label of the best plan through each slot's gap alone (label_gaps);
+  /// none where the slot has no gap or the labels were not asked for.
+  std::array<std::optional<Label>, expert::kGapSlots> slot_labels;
 };
 
 /// One scenario's lines in each of a shard's three files.
@@ -40,6 +50,9 @@ struct ScenarioRows {
 [[nodiscard]] std::vector<std::string> classifier_features();
 [[nodiscard]] std::vector<std::string> action_inputs();
 [[nodiscard]] std::vector<std::string> action_targets();
+/// The scene columns that describe it through its gap slots (the gap
+/// classifier's inputs).
+[[nodiscard]] std::vector<std::string> gap_classifier_features();
 
 /// The header line of each file.
 [[nodiscard]] ScenarioRows header_rows();

@@ -50,6 +50,12 @@ PlanOutcome plan_outcome(const expert::ExpertPlanner& planner, const Scenario& s
     out.solve_ms = result.total_ms;
     // A plan without a solution has no samples to learn from.
     if (!result.path.states.empty()) {
+      out.gap_slot = expert::gap_slots(scenario).slot_of(result.gap);
+      const auto id = [&scenario](std::optional<CarIndex> c) {
+        return c ? scenario.cars[*c].id : std::string();
+      };
+      out.gap_behind = id(result.gap.car_behind());
+      out.gap_ahead = id(result.gap.car_ahead());
       out.trajectory = std::move(trajectory);
       for (const auto& lanes : result.occupancy) {
         out.lane_modes.push_back(lanes ? static_cast<int>(*lanes) : -1);
@@ -64,6 +70,29 @@ PlanOutcome plan_outcome(const expert::ExpertPlanner& planner, const Scenario& s
     out.objective = expert::kInfinity;
   }
   return out;
+}
+
+namespace {
+
+int rank(Label label) { return label == Label::WellPosed ? 2 : label == Label::IllPosed ? 1 : 0; }
+
+}  // namespace
+
+void label_gaps(const expert::ExpertPlanner& planner, const Scenario& scenario, double time_limit_s,
+                PlanOutcome& outcome) {
+  const expert::GapSlots slots = expert::gap_slots(scenario);
+  for (int slot = 0; slot < expert::kGapSlots; ++slot) {
+    const auto& gap = slots.gaps[static_cast<std::size_t>(slot)];
+    auto& label = outcome.slot_labels[static_cast<std::size_t>(slot)];
+    label.reset();
+    if (!gap) continue;
+    expert::PlanHints through;
+    through.gap = &*gap;
+    label = plan_outcome(planner, scenario, time_limit_s, through).label;
+    // Successive linearization from another start can end worse: the plan
+    // over every gap is also a plan through the gap it took.
+    if (slot == outcome.gap_slot && rank(outcome.label) > rank(*label)) label = outcome.label;
+  }
 }
 
 ShardFiles::ShardFiles(const std::string& dir, long long shard)

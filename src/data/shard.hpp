@@ -28,6 +28,11 @@ struct ShardRange {
 [[nodiscard]] PlanOutcome plan_outcome(const expert::ExpertPlanner& planner,
                                        const Scenario& scenario, double time_limit_s,
                                        const expert::PlanHints& hints = {});
+/// Fills outcome.slot_labels: the scene planned again through each slot's
+/// gap alone, and labelled (a plan that fails or throws is a failure). The
+/// slot of the gap `outcome` took keeps the better of that and its label.
+void label_gaps(const expert::ExpertPlanner& planner, const Scenario& scenario, double time_limit_s,
+                PlanOutcome& outcome);
 
 /// Everything a worker needs to make shards; shared read-only by all threads.
 struct ShardMaker {
@@ -36,6 +41,7 @@ struct ShardMaker {
   std::optional<Behavior> behavior;
   std::uint64_t seed = 0;
   double time_limit_s = 60.0;
+  bool gap_labels = false;  ///< label every gap slot (label_gaps)
 };
 
 /// The three files of a shard being written.
@@ -61,8 +67,9 @@ void make_shard(const ShardMaker& maker, const ShardRange& range, const std::str
   for (long long i = range.first; i < range.first + range.count; ++i) {
     const auto index = static_cast<std::uint64_t>(i);
     const Scenario scenario = maker.sampler.sample(index, maker.behavior);
-    files.write(scenario_rows(index, scenario_seed(maker.seed, index), scenario,
-                              plan_outcome(maker.planner, scenario, maker.time_limit_s)));
+    PlanOutcome outcome = plan_outcome(maker.planner, scenario, maker.time_limit_s);
+    if (maker.gap_labels) label_gaps(maker.planner, scenario, maker.time_limit_s, outcome);
+    files.write(scenario_rows(index, scenario_seed(maker.seed, index), scenario, outcome));
     planned();
   }
   files.commit();

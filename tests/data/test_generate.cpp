@@ -4,10 +4,12 @@
 #include <set>
 #include <sstream>
 
+#include "data/shard.hpp"
 #include "data_helpers.hpp"
 #include "lanechange/data/dataset.hpp"
 #include "lanechange/error.hpp"
 #include "lanechange/expert/formulation.hpp"
+#include "lanechange/expert/lane_change_solver.hpp"
 #include "lanechange/run/progress.hpp"
 #include "lanechange/sampler.hpp"
 
@@ -247,6 +249,46 @@ TEST(Generate, MismatchedParametersAreRefusedAndNothingChanges) {
   // The same parameters find a complete data set and leave it alone.
   EXPECT_TRUE(run(o, 1).already_complete);
   EXPECT_EQ(testing::all_files(dir.path()), before);
+}
+
+// The follower and target too close together to take the ego between them,
+// both slower than it: only the gap ahead of the target is open. The data
+// set names that gap and labels every gap around the ego on its own.
+TEST(Generate, GapLabelsNameTheOnlyOpenGap) {
+  Scenario s = testing::open_road_scenario();
+  s.ego.v = 10.0;
+  s.leader() = {40.0, 10.0, 0.0};
+  s.follower() = {-24.0, 8.0, 0.0};
+  s.target() = {-10.0, 8.0, 0.0};
+  validate_scenario(s);
+  const expert::ExpertPlanner planner(Config{}, std::make_shared<expert::FastLaneChangeSolver>());
+  data::PlanOutcome outcome = data::plan_outcome(planner, s, 60.0);
+  ASSERT_EQ(outcome.label, Label::WellPosed) << outcome.reason;
+  // Both cars are behind the ego: the gap beside it is the one ahead of the target.
+  EXPECT_EQ(outcome.gap_slot, expert::kGapSlotBeside);
+  EXPECT_EQ(outcome.gap_behind, s.cars[car_of(Role::Target)].id);
+  EXPECT_EQ(outcome.gap_ahead, "");
+  data::label_gaps(planner, s, 60.0, outcome);
+  const auto& labels = outcome.slot_labels;
+  EXPECT_EQ(labels[expert::kGapSlotBeside], Label::WellPosed);
+  EXPECT_EQ(labels[expert::kGapSlotBeside - 1], Label::Failure);  // between the two
+  EXPECT_EQ(labels[expert::kGapSlotBeside - 2], Label::Failure);  // behind the follower
+  EXPECT_FALSE(labels[expert::kGapSlotBeside + 1].has_value());   // the lane has no more
+  // The row carries the gap and the labels under their columns.
+  const std::string row = data::scenario_rows(0, 1, s, outcome).scenarios;
+  const auto columns = data::scenario_columns();
+  const auto at = [&columns](const std::string& name) {
+    return std::find(columns.begin(), columns.end(), name) - columns.begin();
+  };
+  std::vector<std::string> fields;
+  std::stringstream line(row.substr(0, row.size() - 1));
+  for (std::string f; std::getline(line, f, ',');) fields.push_back(f);
+  fields.resize(columns.size());
+  EXPECT_EQ(fields[at("gap_slot")], "0");  // the slot beside the ego
+  EXPECT_EQ(fields[at("gap_0_label")], "well_posed");
+  EXPECT_EQ(fields[at("gap_m1_label")], "failure");
+  EXPECT_EQ(fields[at("gap_p1_label")], "");
+  EXPECT_EQ(std::stod(fields[at("gap_0_behind_dx")]), s.target().x - s.ego.x);
 }
 
 TEST(Progress, LogLineHasCountsRateAndEta) {

@@ -20,7 +20,7 @@
 
 namespace lanechange::data {
 
-inline constexpr std::string_view kDatasetFormat = "lanechange.dataset/2";
+inline constexpr std::string_view kDatasetFormat = "lanechange.dataset/3";
 inline constexpr std::string_view kManifestName = "manifest.json";
 
 /// Everything that fixes a data set's content. Two runs with equal options
@@ -33,6 +33,9 @@ struct GenerateOptions {
   std::string solver = "fast";  ///< "fast" or "reference"
   long long shard_size = 200;
   double time_limit_s = 60.0;  ///< per plan
+  /// Also plan each gap slot's gap alone and record its label (one more plan
+  /// per gap around the ego; docs/dataset.md, "Gaps").
+  bool gap_labels = false;
   Config config;
 };
 
