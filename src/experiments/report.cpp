@@ -93,7 +93,11 @@ void table_one(Document& d, const ReportInputs& in) {
   d.paragraph("Held-out accuracy on " + data.at("test_scenarios").dump() + " test scenes (" +
               data.at("train_scenarios").dump() +
               " for training, split by scenario). The paper's classifiers take the 13 scene "
-              "features; \"with behavior\" adds the other cars' behavior as an input.");
+              "features; \"with behavior\" adds the other cars' behavior as an input. The "
+              "gap classifiers (docs/learning.md) take the scene through the gaps around the "
+              "ego and name the gap to take, or none: \"gap named\" is the share that names "
+              "the expert's own answer (with every gap labelled, \"gap completable\" is the "
+              "share whose gap the expert completes well-posed, or that rightly name none).");
   d.table(classifier_table(in.metrics));
   d.paragraph("The SVM's confusion matrix, normalised by row (the paper's Fig. 3):");
   d.table(svm_confusion_table(in.metrics));

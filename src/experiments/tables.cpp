@@ -196,18 +196,32 @@ ExpertLabels read_expert_labels(const std::vector<std::string>& dataset_dirs) {
 }
 
 Table classifier_table(const nlohmann::json& metrics) {
+  // Models trained on data without gap features have no gap classifiers.
+  const bool gaps = metrics.contains("gap_classifiers");
+  // Without every gap labelled, the one gap known to be completable is the
+  // expert's own, and the second column would repeat the first.
+  const bool labelled = gaps && metrics.value("gap_labels", false);
   Table t{{"classifier", "accuracy (13 features)", "with behavior", "paper"}, {}};
+  if (gaps) t.header.emplace_back("gap named");
+  if (labelled) t.header.emplace_back("gap completable");
   for (const auto& [name, paper] : kPaperAccuracy) {
     const auto plain = metrics.at("classifiers").at(name).at("test_accuracy").get<double>();
     const auto with =
         metrics.at("classifiers_with_behavior").at(name).at("test_accuracy").get<double>();
     t.rows.push_back(
         {name, fixed(100 * plain, 1) + "%", fixed(100 * with, 1) + "%", fixed(paper, 1) + "%"});
+    if (!gaps) continue;
+    const nlohmann::json& g = metrics.at("gap_classifiers").at(name);
+    t.rows.back().push_back(fixed(100 * g.at("test_accuracy").get<double>(), 1) + "%");
+    if (labelled) {
+      t.rows.back().push_back(fixed(100 * g.at("completable_share").get<double>(), 1) + "%");
+    }
   }
   const auto majority = metrics.at("majority_class").at("test_accuracy").get<double>();
   t.rows.push_back(
       {"majority class (" + metrics.at("majority_class").at("class").get<std::string>() + ")",
        fixed(100 * majority, 1) + "%", "", "–"});
+  t.rows.back().resize(t.header.size());
   return t;
 }
 

@@ -2,6 +2,7 @@
 // single-precision rows and C arrays; the conversions live here only.
 #include <svm.h>
 
+#include <algorithm>
 #include <fstream>
 #include <opencv2/ml.hpp>
 
@@ -186,7 +187,9 @@ class NaiveBayesClassifier : public Classifier {
   explicit NaiveBayesClassifier(const json& hyper)
       : model_({hyper.value("kernel", true), hyper.value("bandwidth_scale", 1.0)}) {}
   void fit(const Eigen::MatrixXd& x, const std::vector<int>& y) override {
-    model_.fit(x, y, kClasses);
+    // The labels are 0..kClasses-1, or a gap classifier's 0..kGapClasses-1.
+    const int top = y.empty() ? 0 : *std::max_element(y.begin(), y.end());
+    model_.fit(x, y, std::max(kClasses, top + 1));
   }
   [[nodiscard]] std::vector<int> predict(const Eigen::MatrixXd& x) const override {
     std::vector<int> out;

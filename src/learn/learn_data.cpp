@@ -111,9 +111,18 @@ int lane_mode_of(const CsvFile& csv, std::string_view field) {
   return static_cast<int>(mode);
 }
 
+// The slot named in a gap_slot column (empty: none), as expert::gap_slot_name spells it.
+int slot_named(std::string_view name, const std::string& where) {
+  if (name.empty()) return kNoGap;
+  for (int slot = 0; slot < expert::kGapSlots; ++slot) {
+    if (expert::gap_slot_name(slot) == name) return slot;
+  }
+  throw InputError("", where + " holds an unknown gap slot '" + std::string(name) + "'");
+}
+
 struct Loader {
   LearningData& data;
-  Rows features, inputs, targets, plan_states;
+  Rows features, inputs, targets, plan_states, gap_features;
   // Per data set: scenario index -> row of the scenario table.
   std::vector<int> row_of_index;
 
@@ -122,6 +131,7 @@ struct Loader {
     const auto cols = csv.columns(data.classifier_features);
     const std::size_t c_index = csv.column("index"), c_label = csv.column("label"),
                       c_behavior = csv.column("behavior");
+    const GapColumns gaps = gap_columns(csv);
     std::vector<std::string_view> f;
     while (csv.next(f)) {
       for (std::size_t c : cols) features.values.push_back(csv.number(f[c]));
@@ -135,7 +145,41 @@ struct Loader {
       t.dataset.push_back(dataset);
       t.label.push_back(index_in(kLabelNames, f[c_label], path));
       t.behavior.push_back(index_in(kBehaviorNames, f[c_behavior], path));
+      if (!gaps.features.empty()) read_gaps(csv, gaps, f);
     }
+  }
+
+  // Where a scenarios file keeps the gap features and targets.
+  struct GapColumns {
+    std::vector<std::size_t> features;
+    std::size_t slot = 0;
+    std::array<std::size_t, expert::kGapSlots> labels{};
+  };
+  [[nodiscard]] GapColumns gap_columns(const CsvFile& csv) const {
+    GapColumns g;
+    if (data.gap_classifier_features.empty()) return g;
+    g.features = csv.columns(data.gap_classifier_features);
+    g.slot = csv.column("gap_slot");
+    for (int s = 0; s < expert::kGapSlots; ++s) {
+      g.labels[static_cast<std::size_t>(s)] =
+          csv.column("gap_" + std::string(expert::gap_slot_name(s)) + "_label");
+    }
+    return g;
+  }
+
+  // The gap features and targets of one scenario row.
+  void read_gaps(const CsvFile& csv, const GapColumns& g, const std::vector<std::string_view>& f) {
+    ScenarioTable& t = data.scenarios;
+    for (std::size_t c : g.features) gap_features.values.push_back(csv.number(f[c]));
+    const int slot = slot_named(f[g.slot], csv.path());
+    const bool well_posed = t.label.back() == kWellPosed;
+    t.gap_class.push_back(well_posed ? slot : kNoGap);
+    unsigned completable = well_posed && slot != kNoGap ? 1U << slot : 0U;
+    for (int s = 0; s < expert::kGapSlots; ++s) {
+      if (f[g.labels[static_cast<std::size_t>(s)]] == kLabelNames[kWellPosed])
+        completable |= 1U << s;
+    }
+    t.completable_slots.push_back(completable);
   }
 
   void read_samples(const std::string& path) {
@@ -185,18 +229,21 @@ void adopt_or_compare(LearningData& data, const json& manifest, const std::strin
   const auto features = names_at(columns, "classifier_features", dir);
   const auto inputs = names_at(columns, "action_inputs", dir);
   const auto targets = names_at(columns, "action_targets", dir);
+  const auto gap_features = columns.value("gap_classifier_features", std::vector<std::string>{});
   const json& config = manifest.at("parameters").at("config");
   const std::string format = manifest.at("format").get<std::string>();
   if (data.datasets.empty()) {
     data.classifier_features = features;
+    data.gap_classifier_features = gap_features;
     data.action_inputs = inputs;
     data.action_targets = targets;
     data.config = config;
     data.dataset_format = format;
     return;
   }
-  if (features != data.classifier_features || inputs != data.action_inputs ||
-      targets != data.action_targets || format != data.dataset_format) {
+  if (features != data.classifier_features || gap_features != data.gap_classifier_features ||
+      inputs != data.action_inputs || targets != data.action_targets ||
+      format != data.dataset_format) {
     throw InputError("", dir + " has other columns or format than " + data.datasets[0].dir);
   }
   if (expert_data_config(config) != expert_data_config(data.config)) {
@@ -209,7 +256,7 @@ void adopt_or_compare(LearningData& data, const json& manifest, const std::strin
 LearningData load_learning_data(const std::vector<std::string>& dirs) {
   if (dirs.empty()) throw InputError("--data", "at least one data set is needed");
   LearningData data;
-  Loader loader{data, {}, {}, {}, {}, {}};
+  Loader loader{data, {}, {}, {}, {}, {}, {}};
   for (const std::string& dir : dirs) {
     const data::DatasetSummary summary = data::summarize_dataset(dir);  // checks checksums
     const json manifest = data::read_manifest(dir);
@@ -219,10 +266,13 @@ LearningData load_learning_data(const std::vector<std::string>& dirs) {
       loader.inputs.width = data.action_inputs.size();
       loader.targets.width = data.action_targets.size();
       loader.plan_states.width = PlanNodeTable::columns().size();
+      loader.gap_features.width = data.gap_classifier_features.size();
       loader.read_dataset(dir, manifest, static_cast<int>(data.datasets.size()));
     } catch (const json::exception& e) {
       throw InputError("", dir + "/manifest.json is malformed (" + e.what() + ")");
     }
+    const bool labelled = manifest["parameters"].value("gap_labels", false);
+    data.gap_labels = (data.datasets.empty() || data.gap_labels) && labelled;
     data.datasets.push_back({dir, run::file_crc32((fs::path(dir) / "manifest.json").string()),
                              summary.scenarios,
                              manifest["parameters"].value("seed", std::uint64_t{0})});
@@ -231,6 +281,7 @@ LearningData load_learning_data(const std::vector<std::string>& dirs) {
   data.samples.inputs = loader.inputs.matrix();
   data.samples.targets = loader.targets.matrix();
   data.plan_nodes.states = loader.plan_states.matrix();
+  data.scenarios.gap_features = loader.gap_features.matrix();
   return data;
 }
 

@@ -14,7 +14,8 @@ using nlohmann::json;
 
 namespace {
 
-constexpr std::array<FeatureSet, 2> kFeatureSets = {FeatureSet::Plain, FeatureSet::WithBehavior};
+constexpr std::array<FeatureSet, 3> kFeatureSets = {FeatureSet::Plain, FeatureSet::WithBehavior,
+                                                    FeatureSet::Gaps};
 
 void verify_files(const std::string& dir, const json& files) {
   for (const auto& [name, crc] : files.items()) {
@@ -45,7 +46,12 @@ void check_requirements(const json& d, const ModelRequirements& r) {
 }  // namespace
 
 std::string_view feature_set_name(FeatureSet set) {
-  return set == FeatureSet::Plain ? "plain" : "with_behavior";
+  switch (set) {
+    case FeatureSet::Plain: return "plain";
+    case FeatureSet::WithBehavior: return "with_behavior";
+    case FeatureSet::Gaps: return "gaps";
+  }
+  return "?";
 }
 
 Model Model::load(const std::string& dir, const ModelRequirements& requirements) {
@@ -64,6 +70,8 @@ Model Model::load(const std::string& dir, const ModelRequirements& requirements)
     check_requirements(d, requirements);
     for (FeatureSet set : kFeatureSets) {
       const std::string set_name(feature_set_name(set));
+      // A model trained on data without gap features has no gap classifiers.
+      if (set == FeatureSet::Gaps && !d.at("standardizers").contains(set_name)) continue;
       m.standardizers_[set] = Standardizer::from_json(d.at("standardizers").at(set_name));
       for (ClassifierKind kind : kClassifierKinds) {
         const json& entry = d.at("classifiers").at(set_name).at(std::string(classifier_name(kind)));
@@ -100,6 +108,10 @@ std::shared_ptr<const StrategyModel> Model::strategy() const {
 
 std::vector<int> Model::classify(ClassifierKind kind, FeatureSet set,
                                  const Eigen::MatrixXd& raw) const {
+  if (!has(set)) {
+    throw InputError("--model", dir_ + " has no " + std::string(feature_set_name(set)) +
+                                    " classifiers: train it on data sets with gap features");
+  }
   const Standardizer& s = standardizers_.at(set);
   if (raw.cols() != s.mean.size()) {
     throw InputError("", "the classifier takes " + std::to_string(s.mean.size()) + " inputs, not " +

@@ -107,9 +107,18 @@ json accuracy_by_behavior(const Context& c, const std::vector<int>& truth,
   return out;
 }
 
-json train_classifier(Context& c, ClassifierKind kind, FeatureSet set, const Eigen::MatrixXd& x,
-                      const std::vector<int>& y, const Eigen::MatrixXd& x_test,
-                      const std::vector<int>& y_test) {
+// What one classifier is trained on: standardized rows and their classes.
+struct ClassifierData {
+  Eigen::MatrixXd x, x_test;
+  std::vector<int> y, y_test;
+  int classes = kClasses;
+};
+
+json train_classifier(Context& c, ClassifierKind kind, FeatureSet set, const ClassifierData& d,
+                      std::vector<int>& predicted) {
+  const Eigen::MatrixXd& x = d.x;
+  const std::vector<int>& y = d.y;
+  const std::vector<int>& y_test = d.y_test;
   const std::string name(classifier_name(kind));
   const std::string set_name(feature_set_name(set));
   const Selection selection =
@@ -119,7 +128,7 @@ json train_classifier(Context& c, ClassifierKind kind, FeatureSet set, const Eig
   model->fit(x, y);
   const double train_s = seconds_since(start);
   const auto predict_start = Clock::now();
-  const std::vector<int> predicted = model->predict(x_test);
+  predicted = model->predict(d.x_test);
   const double predict_us =
       1e6 * seconds_since(predict_start) / double(std::max<std::size_t>(y_test.size(), 1));
 
@@ -129,7 +138,7 @@ json train_classifier(Context& c, ClassifierKind kind, FeatureSet set, const Eig
   c.model["classifiers"][set_name][name] = {{"file", file},
                                             {"hyperparameters", selection.chosen().hyper}};
 
-  const ClassScores scores = score(y_test, predicted, kClasses);
+  const ClassScores scores = score(y_test, predicted, d.classes);
   json m = scores.to_json();
   m["cv_accuracy_mean"] = selection.chosen().mean();
   m["cv_accuracy_sd"] = selection.chosen().sd();
@@ -145,8 +154,11 @@ json train_classifier(Context& c, ClassifierKind kind, FeatureSet set, const Eig
   m["accuracy_by_behavior"] = accuracy_by_behavior(c, y_test, predicted);
 
   const std::string stem = "confusion_" + set_name + "_" + name;
-  detail::write_confusion_csv(scores.row_normalised(), (c.dir / (stem + ".csv")).string());
-  if (c.options.plots) {
+  // The confusion files name the scene classes; a gap classifier's are in metrics.json.
+  if (d.classes == kClasses) {
+    detail::write_confusion_csv(scores.row_normalised(), (c.dir / (stem + ".csv")).string());
+  }
+  if (c.options.plots && d.classes == kClasses) {
     detail::plot_confusion(scores.row_normalised(), name + " (" + set_name + ")",
                            (c.dir / (stem + ".png")).string());
   }
@@ -161,17 +173,63 @@ void train_classifier_set(Context& c, FeatureSet set) {
   const ScenarioTable& t = c.data.scenarios;
   const Standardizer standardizer =
       Standardizer::fit(classifier_inputs(t, c.split.train, with_behavior));
-  const Eigen::MatrixXd x = standardizer.apply(classifier_inputs(t, c.split.train, with_behavior));
-  const Eigen::MatrixXd x_test =
-      standardizer.apply(classifier_inputs(t, c.split.test, with_behavior));
-  const std::vector<int> y = labels_of(t.label, c.split.train);
-  const std::vector<int> y_test = labels_of(t.label, c.split.test);
+  ClassifierData d;
+  d.x = standardizer.apply(classifier_inputs(t, c.split.train, with_behavior));
+  d.x_test = standardizer.apply(classifier_inputs(t, c.split.test, with_behavior));
+  d.y = labels_of(t.label, c.split.train);
+  d.y_test = labels_of(t.label, c.split.test);
   const std::string set_name(feature_set_name(set));
   c.model["standardizers"][set_name] = standardizer.to_json();
   c.model["features"]["classifier_" + set_name] = classifier_input_names(c.data, with_behavior);
   json& out = c.metrics[with_behavior ? "classifiers_with_behavior" : "classifiers"];
+  std::vector<int> predicted;
   for (ClassifierKind kind : kClassifierKinds) {
-    out[std::string(classifier_name(kind))] = train_classifier(c, kind, set, x, y, x_test, y_test);
+    out[std::string(classifier_name(kind))] = train_classifier(c, kind, set, d, predicted);
+  }
+}
+
+Eigen::MatrixXd rows_of(const Eigen::MatrixXd& all, const std::vector<int>& rows) {
+  Eigen::MatrixXd out(static_cast<Eigen::Index>(rows.size()), all.cols());
+  for (std::size_t i = 0; i < rows.size(); ++i)
+    out.row(static_cast<Eigen::Index>(i)) = all.row(rows[i]);
+  return out;
+}
+
+// The share of test scenes whose predicted gap the expert is known to
+// complete well-posed, or that are rightly refused (no such gap known).
+double completable_share(const ScenarioTable& t, const std::vector<int>& test,
+                         const std::vector<int>& predicted) {
+  long long right = 0;
+  for (std::size_t i = 0; i < test.size(); ++i) {
+    const unsigned ok = t.completable_slots[static_cast<std::size_t>(test[i])];
+    const int p = predicted[i];
+    right += (p == kNoGap ? ok == 0U : ((ok >> p) & 1U) != 0U) ? 1 : 0;
+  }
+  return test.empty() ? 0.0 : double(right) / double(test.size());
+}
+
+// The gap classifiers (docs/learning.md, "Gap classifiers"): from the gap
+// features, the slot whose gap the expert completes, or none.
+void train_gap_classifiers(Context& c) {
+  const ScenarioTable& t = c.data.scenarios;
+  if (c.data.gap_classifier_features.empty()) return;
+  const Standardizer standardizer = Standardizer::fit(rows_of(t.gap_features, c.split.train));
+  ClassifierData d;
+  d.x = standardizer.apply(rows_of(t.gap_features, c.split.train));
+  d.x_test = standardizer.apply(rows_of(t.gap_features, c.split.test));
+  d.y = labels_of(t.gap_class, c.split.train);
+  d.y_test = labels_of(t.gap_class, c.split.test);
+  d.classes = kGapClasses;
+  const std::string set_name(feature_set_name(FeatureSet::Gaps));
+  c.model["standardizers"][set_name] = standardizer.to_json();
+  c.model["features"]["classifier_" + set_name] = c.data.gap_classifier_features;
+  c.metrics["gap_labels"] = c.data.gap_labels;
+  json& out = c.metrics["gap_classifiers"];
+  std::vector<int> predicted;
+  for (ClassifierKind kind : kClassifierKinds) {
+    json m = train_classifier(c, kind, FeatureSet::Gaps, d, predicted);
+    m["completable_share"] = completable_share(t, c.split.test, predicted);
+    out[std::string(classifier_name(kind))] = std::move(m);
   }
 }
 
@@ -518,6 +576,7 @@ TrainReport train_models(const TrainOptions& options) {
     c.metrics["majority_class"] = majority_class(c);
     train_classifier_set(c, FeatureSet::Plain);
     train_classifier_set(c, FeatureSet::WithBehavior);
+    train_gap_classifiers(c);
     train_action_network(c);
     train_strategy(c);
     c.metrics["wall_s"] = seconds_since(start);

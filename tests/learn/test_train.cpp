@@ -147,6 +147,52 @@ TEST_F(Trained, ReloadedModelGivesTheSamePredictions) {
               m.at("network").at("test_rmse").at("a").get<double>(), 1e-9);
 }
 
+// The gap classifiers learn, from the gap features, the slot of the gap the
+// expert completes (or none), and reload to the scores they were trained to.
+TEST_F(Trained, GapClassifiersNameTheExpertsGapAndReloadToTheirScores) {
+  const LearningData data = load_learning_data({data_dir()});
+  const ScenarioTable& t = data.scenarios;
+  ASSERT_EQ(t.gap_features.rows(), t.rows());
+  ASSERT_EQ(t.gap_features.cols(), static_cast<Eigen::Index>(data.gap_classifier_features.size()));
+  int named = 0;
+  for (int r = 0; r < t.rows(); ++r) {
+    const auto row = static_cast<std::size_t>(r);
+    const int slot = t.gap_class[row];
+    EXPECT_EQ(slot != kNoGap, t.label[row] == kWellPosed) << "row " << r;
+    // Without gap labels the one gap known to be completable is the plan's.
+    EXPECT_EQ(t.completable_slots[row], slot == kNoGap ? 0U : 1U << slot) << "row " << r;
+    named += slot != kNoGap ? 1 : 0;
+  }
+  EXPECT_GT(named, 0);
+  const Model model = Model::load(model_dir());
+  ASSERT_TRUE(model.has(FeatureSet::Gaps));
+  const auto test_indices = model.description()
+                                .at("data")
+                                .at("datasets")
+                                .at(0)
+                                .at("test_indices")
+                                .get<std::vector<long long>>();
+  Eigen::MatrixXd raw(static_cast<Eigen::Index>(test_indices.size()), t.gap_features.cols());
+  std::vector<int> truth;
+  for (int r = 0; r < t.rows(); ++r) {
+    const auto row = static_cast<std::size_t>(r);
+    if (std::find(test_indices.begin(), test_indices.end(), t.index[row]) == test_indices.end()) {
+      continue;
+    }
+    raw.row(static_cast<Eigen::Index>(truth.size())) = t.gap_features.row(r);
+    truth.push_back(t.gap_class[row]);
+  }
+  ASSERT_EQ(truth.size(), test_indices.size());
+  for (ClassifierKind kind : kClassifierKinds) {
+    const std::vector<int> predicted = model.classify(kind, FeatureSet::Gaps, raw);
+    long long right = 0;
+    for (std::size_t i = 0; i < truth.size(); ++i) right += predicted[i] == truth[i] ? 1 : 0;
+    const json& m = report_metrics_.at("gap_classifiers").at(std::string(classifier_name(kind)));
+    EXPECT_DOUBLE_EQ(double(right) / double(truth.size()), m.at("test_accuracy").get<double>());
+    EXPECT_DOUBLE_EQ(m.at("completable_share").get<double>(), m.at("test_accuracy").get<double>());
+  }
+}
+
 TEST_F(Trained, StrategyModelIsSavedWithAChecksumAndLoadsBack) {
   const json m = json::parse(testing::read_text(model_dir() + "/metrics.json"));
   const json& s = m.at("strategy");

@@ -12,6 +12,8 @@
 #include <string_view>
 #include <vector>
 
+#include "lanechange/expert/gap_slots.hpp"
+
 namespace lanechange::learn {
 
 inline constexpr int kClasses = 3;
@@ -20,6 +22,10 @@ inline constexpr std::array<std::string_view, kClasses> kLabelNames = {"well_pos
                                                                        "failure"};
 inline constexpr int kWellPosed = 0;
 inline constexpr int kFailure = 2;
+/// The gap classifier's classes: a slot of expert::GapSlots (its gap is the
+/// one to take), or kNoGap (no lane change is worth trying).
+inline constexpr int kGapClasses = expert::kGapSlots + 1;
+inline constexpr int kNoGap = expert::kGapSlots;
 inline constexpr int kBehaviors = 3;
 /// The order of the optional behavior one-hot input.
 inline constexpr std::array<std::string_view, kBehaviors> kBehaviorNames = {
@@ -40,6 +46,13 @@ struct ScenarioTable {
   std::vector<int> behavior;     ///< index into kBehaviorNames
   std::vector<int> dataset;      ///< index into LearningData::datasets
   std::vector<long long> index;  ///< the scenario's index within its data set
+  /// rows x gap_classifier_features (no columns for data sets without them).
+  Eigen::MatrixXd gap_features;
+  /// The slot of the gap the expert's plan completes well-posed, else kNoGap.
+  std::vector<int> gap_class;
+  /// Bit s set where slot s's gap is known to be completed well-posed: the
+  /// plan's own gap, and with gap labels every slot labelled so.
+  std::vector<unsigned> completable_slots;
   [[nodiscard]] int rows() const { return static_cast<int>(label.size()); }
 };
 
@@ -67,6 +80,10 @@ struct PlanNodeTable {
 struct LearningData {
   std::vector<DatasetIdentity> datasets;
   std::vector<std::string> classifier_features;
+  /// Empty where the data sets describe no gaps (format 2).
+  std::vector<std::string> gap_classifier_features;
+  /// Every data set labels each gap slot (generate --gap-labels).
+  bool gap_labels = false;
   std::vector<std::string> action_inputs;
   std::vector<std::string> action_targets;
   std::string dataset_format;

@@ -22,8 +22,10 @@ namespace lanechange::learn {
 inline constexpr std::string_view kModelFormat = "lanechange.model/1";
 inline constexpr std::string_view kModelFile = "model.json";
 
-/// The classifier sets in a model: without and with the behavior one-hot.
-enum class FeatureSet { Plain, WithBehavior };
+/// The classifier sets in a model: the scene classifiers without and with
+/// the behavior one-hot, and the gap classifiers (data sets of format 3 on),
+/// which name a gap slot or none from the gap features.
+enum class FeatureSet { Plain, WithBehavior, Gaps };
 [[nodiscard]] std::string_view feature_set_name(FeatureSet set);
 
 /// What the caller will feed the model; a model that does not fit is refused
@@ -47,6 +49,9 @@ class Model {
   /// by the behavior one-hot for FeatureSet::WithBehavior.
   [[nodiscard]] std::vector<int> classify(ClassifierKind kind, FeatureSet set,
                                           const Eigen::MatrixXd& raw) const;
+  /// Whether the model has the set (every model has the scene classifiers;
+  /// the gap classifiers need gap features in the data).
+  [[nodiscard]] bool has(FeatureSet set) const { return standardizers_.contains(set); }
   [[nodiscard]] const Policy& policy() const { return *policy_; }
   /// The lane-strategy model (strategy.json). Models trained before it
   /// existed load without one: InputError only when it is asked for.
