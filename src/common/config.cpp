@@ -117,6 +117,8 @@ void Config::validate() const {
   require(traffic.follow_decel > 0, "traffic.follow_decel", "must be positive");
   require(!expert.cut_in_decel || *expert.cut_in_decel > 0, "expert.cut_in_decel",
           "must be positive or null");
+  require(expert.restore_distance_within >= 0, "expert.restore_distance_within",
+          "must not be negative");
   require(traffic.replay_prediction != Behavior::Replay, "traffic.replay_prediction",
           "must be a model (constant_speed, constant_accel or idm), not replay");
   require(!traffic.max_decel || *traffic.max_decel > 0, "traffic.max_decel",
@@ -178,6 +180,7 @@ TrafficSettings paper_traffic() {
 Config paper_formulation(Config config) {
   config.expert.gap = GapChoice::Fixed;
   config.expert.cut_in_decel = std::nullopt;
+  config.expert.restore_distance_within = 0.0;
   config.traffic = paper_traffic();
   return config;
 }
@@ -203,6 +206,7 @@ Config authors_preset() {
   c.expert.globalisation = Globalisation::Off;  // more than 10 rounds is a failure there
   c.expert.gap = GapChoice::Fixed;
   c.expert.cut_in_decel = std::nullopt;
+  c.expert.restore_distance_within = 0.0;
   c.traffic_integration = TrafficIntegration::Euler;
   c.traffic = paper_traffic();
   c.sampler.target_speed = {20.0 / 3.6, 40.0 / 3.6};

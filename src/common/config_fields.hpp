@@ -153,6 +153,7 @@ void visit_fields(V& v, S& s) requires std::same_as<std::remove_const_t<S>, Expe
   v("aim_behind_target", s.aim_behind_target);
   v("gap", s.gap);
   v("cut_in_decel", s.cut_in_decel);
+  v("restore_distance_within", s.restore_distance_within);
 }
 
 template <class V, class S>

@@ -101,40 +101,68 @@ std::optional<HalfSpace> cut_in_row(const Scenario& s, const Config& config, Car
 }
 
 // What one node's rows need beyond the scene: where in the prediction it
-// looks, and the linearization point's ego speed there.
+// looks, the linearization point's ego speed there, and how much of a
+// shortfall at the start (a row the initial state breaks) it still allows.
 struct NodeContext {
   int index = 0;  ///< of the prediction, for node k
   double ego_speed = 0.0;
   double dt = 0.0;
+  double shortfall_left = 0.0;  ///< 1 at the start, 0 once the distance must be whole
+  bool in_ego_lane = true;      ///< the ego's body at the start, by lane
+  bool in_target_lane = false;
 };
+
+// A row at node k, loosened by the share of its shortfall at the start that
+// the node may still have: an ego that starts closer than Eq. 1 allows
+// (recorded traffic) restores the distance over expert.restore_distance_within
+// instead of failing at node 1. Rows of a lane the ego's body is not in at
+// the start are not loosened: a cut-in keeps the whole distance.
+template <class MakeRow>
+HalfSpace restoring(const Scenario& s, const NodeContext& node, bool ego_in_lane, MakeRow make) {
+  HalfSpace h = make(static_cast<std::size_t>(node.index));
+  if (node.shortfall_left <= 0.0 || !ego_in_lane) return h;
+  const HalfSpace start = make(std::size_t{0});
+  const Eigen::Vector4d z0(s.ego.x, s.ego.y, s.ego.v, s.ego.theta);
+  h.upper += node.shortfall_left * std::max(0.0, start.g.dot(z0) - start.upper);
+  return h;
+}
 
 CarRows car_rows(const Scenario& s, const Config& config, const TrafficPrediction& p,
                  const NodeContext& node, const Gap& gap) {
   CarRows r;
-  const auto at = static_cast<std::size_t>(node.index);
   for (CarIndex c = 0; c < s.car_count(); ++c) {
     if (s.cars[c].lane != Lane::Ego) continue;
+    const CarTrack& car = p.car(c);
     if (s.car(c).x > s.ego.x) {
       const SafeDistance d = s.centre_safe_distance(c, s.safe_distance.leader);
-      r.ego_lane.push_back(behind(d, p.car(c).x[at]));
+      r.ego_lane.push_back(restoring(s, node, node.in_ego_lane,
+                                     [&](std::size_t at) { return behind(d, car.x[at]); }));
     } else {
       const SafeDistance d = s.centre_safe_distance(c, s.safe_distance.follower);
-      r.ego_lane.push_back(ahead_of(d, p.car(c).x[at], p.car(c).v[at]));
+      r.ego_lane.push_back(restoring(s, node, node.in_ego_lane, [&](std::size_t at) {
+        return ahead_of(d, car.x[at], car.v[at]);
+      }));
     }
   }
   for (const CarIndex c : gap.behind) {
     const SafeDistance d = s.centre_safe_distance(c, s.safe_distance.follower);
-    r.target_lane.push_back(ahead_of(d, p.car(c).x[at], p.car(c).v[at]));
+    const CarTrack& car = p.car(c);
+    r.target_lane.push_back(restoring(s, node, node.in_target_lane, [&](std::size_t at) {
+      return ahead_of(d, car.x[at], car.v[at]);
+    }));
   }
   // Only the nearest car behind follows the ego; the others follow it.
   if (const auto c = gap.car_behind()) {
+    const auto at = static_cast<std::size_t>(node.index);
     const auto cut_in =
         cut_in_row(s, config, *c, p.car(*c).x[at], p.car(*c).v[at], node.ego_speed, node.dt);
     if (cut_in) r.target_lane.push_back(*cut_in);
   }
   for (const CarIndex c : gap.ahead) {
     const SafeDistance d = s.centre_safe_distance(c, s.safe_distance.target);
-    r.target_lane.push_back(behind(d, p.car(c).x[at]));
+    const CarTrack& car = p.car(c);
+    r.target_lane.push_back(restoring(s, node, node.in_target_lane,
+                                      [&](std::size_t at) { return behind(d, car.x[at]); }));
   }
   return r;
 }
@@ -351,7 +379,12 @@ LaneChangeQp build_lane_change_qp(const Scenario& s, const Config& config, const
     const Interval heading{qp.state_lower[k][kTheta], qp.state_upper[k][kTheta]};
     const LaneGeometry lane{0.5 * s.lane_width, 0.5 * s.vehicle.width, 0.5 * s.vehicle.length,
                             reachable_headings(s, heading, k * qp.dt)};
-    const NodeContext node{index, point.states[k][kV], qp.dt};
+    // Node 0 is the given state: checked whole where the config constrains it.
+    const double restore = e.restore_distance_within;
+    const NodeContext node{
+        index, point.states[k][kV], qp.dt,
+        restore > 0.0 && k > 0 ? std::max(0.0, 1.0 - k * qp.dt / restore) : 0.0,
+        s.ego.y - lane.half_width<lane.boundary, s.ego.y + lane.half_width> lane.boundary};
     qp.node_modes[k] = lane_modes(car_rows(s, config, prediction, node, gap), e.lane_rule, lane);
   }
   return qp;

@@ -548,6 +548,38 @@ TEST(Planner, AStartInsideTheLeadersSafeDistanceIsTheReasonGiven) {
   EXPECT_EQ(other.reason.find("safe distance"), std::string::npos) << other.reason;
 }
 
+// A start 2.4 m inside the leader's safe distance (recorded traffic drives
+// closer than Eq. 1): the plan restores the distance within
+// expert.restore_distance_within, its shortfall shrinking linearly, while
+// the ego is in its lane; asked for the whole distance at once, it fails.
+TEST(Planner, AnEgoThatStartsTooCloseRestoresTheDistanceInTheSetTime) {
+  Scenario s = open_road_scenario();
+  const double needed = 8.4 + 0.5 * s.ego.v;
+  s.leader() = {needed - 2.4, s.ego.v, 0.0};
+  Config config;
+  config.expert.restore_distance_within = 3.0;
+  const ExpertPlanner planner(config, std::make_shared<FastLaneChangeSolver>());
+  const ExpertResult r = planner.plan(s);
+  ASSERT_EQ(r.status, PlanStatus::Converged) << r.reason;
+  EXPECT_EQ(planner.to_trajectory(r, s).label, Label::WellPosed);
+  const double dt = s.horizon / s.steps;
+  int checked = 0;
+  for (int k = 1; k <= s.steps; ++k) {
+    if (r.occupancy[k] != LaneOccupancy::EgoLane) continue;
+    const State& z = r.path.states[k];
+    const double gap = r.prediction.car(car_of(Role::Leader)).x[k] - z[kX];
+    const double allowed = 2.4 * std::max(0.0, 1.0 - k * dt / 3.0);
+    EXPECT_GE(gap, 8.4 + 0.5 * z[kV] - allowed - 1e-6) << "node " << k;
+    ++checked;
+  }
+  EXPECT_GT(checked, 0);
+  config.expert.restore_distance_within = 0.0;
+  const ExpertResult whole =
+      ExpertPlanner(config, std::make_shared<FastLaneChangeSolver>()).plan(s);
+  ASSERT_EQ(whole.status, PlanStatus::Infeasible) << whole.reason;
+  EXPECT_NE(whole.reason.find("inside the leader's safe distance"), std::string::npos);
+}
+
 TEST(Planner, WideOpenGapIsWellPosed) {
   for (Behavior b : {Behavior::ConstantSpeed, Behavior::ConstantAccel, Behavior::Idm}) {
     const Scenario s = open_road_scenario(b);
