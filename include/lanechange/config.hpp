@@ -151,7 +151,7 @@ struct ExpertSettings {
   /// the car brakes no harder. Below closed_loop.unsafe_decel, for the
   /// linearization's slack. None (JSON null): Eq. 1 alone, the paper.
   std::optional<double> cut_in_decel = 3.5;
-  /// s: an ego that starts closer to a car than Eq. 1 allows (recorded
+  /// s: an ego that starts closer behind a car than Eq. 1 allows (recorded
   /// traffic, or a car that cut in) restores the distance within this time,
   /// its shortfall at the start shrinking linearly to nothing; 0 asks for the
   /// whole distance from node 1 on (the paper), which such a start cannot meet.

@@ -112,11 +112,14 @@ struct NodeContext {
   bool in_target_lane = false;
 };
 
-// A row at node k, loosened by the share of its shortfall at the start that
-// the node may still have: an ego that starts closer than Eq. 1 allows
-// (recorded traffic) restores the distance over expert.restore_distance_within
-// instead of failing at node 1. Rows of a lane the ego's body is not in at
-// the start are not loosened: a cut-in keeps the whole distance.
+// A row behind a car at node k, loosened by the share of its shortfall at
+// the start that the node may still have: an ego that starts closer than
+// Eq. 1 allows to a car ahead (recorded traffic) restores the distance over
+// expert.restore_distance_within instead of failing at node 1. Rows of a
+// lane the ego's body is not in at the start are not loosened (a cut-in
+// keeps the whole distance), nor are those ahead of the cars behind: a car
+// that closes in from behind is for the ego to leave, not to pull away from
+// while it changes lanes in front of it.
 template <class MakeRow>
 HalfSpace restoring(const Scenario& s, const NodeContext& node, bool ego_in_lane, MakeRow make) {
   HalfSpace h = make(static_cast<std::size_t>(node.index));
@@ -139,17 +142,15 @@ CarRows car_rows(const Scenario& s, const Config& config, const TrafficPredictio
                                      [&](std::size_t at) { return behind(d, car.x[at]); }));
     } else {
       const SafeDistance d = s.centre_safe_distance(c, s.safe_distance.follower);
-      r.ego_lane.push_back(restoring(s, node, node.in_ego_lane, [&](std::size_t at) {
-        return ahead_of(d, car.x[at], car.v[at]);
-      }));
+      r.ego_lane.push_back(ahead_of(d, car.x[static_cast<std::size_t>(node.index)],
+                                    car.v[static_cast<std::size_t>(node.index)]));
     }
   }
   for (const CarIndex c : gap.behind) {
     const SafeDistance d = s.centre_safe_distance(c, s.safe_distance.follower);
     const CarTrack& car = p.car(c);
-    r.target_lane.push_back(restoring(s, node, node.in_target_lane, [&](std::size_t at) {
-      return ahead_of(d, car.x[at], car.v[at]);
-    }));
+    const auto at = static_cast<std::size_t>(node.index);
+    r.target_lane.push_back(ahead_of(d, car.x[at], car.v[at]));
   }
   // Only the nearest car behind follows the ego; the others follow it.
   if (const auto c = gap.car_behind()) {
