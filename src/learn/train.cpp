@@ -213,9 +213,10 @@ double completable_share(const ScenarioTable& t, const std::vector<int>& test,
 void train_gap_classifiers(Context& c) {
   const ScenarioTable& t = c.data.scenarios;
   if (c.data.gap_classifier_features.empty()) return;
-  const Standardizer standardizer = Standardizer::fit(rows_of(t.gap_features, c.split.train));
+  const Eigen::MatrixXd train_rows = rows_of(t.gap_features, c.split.train);
+  const Standardizer standardizer = Standardizer::fit(train_rows);
   ClassifierData d;
-  d.x = standardizer.apply(rows_of(t.gap_features, c.split.train));
+  d.x = standardizer.apply(train_rows);
   d.x_test = standardizer.apply(rows_of(t.gap_features, c.split.test));
   d.y = labels_of(t.gap_class, c.split.train);
   d.y_test = labels_of(t.gap_class, c.split.test);
