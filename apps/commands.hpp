@@ -62,6 +62,8 @@ void add_model_info(CLI::App& app);
 void add_simulate(CLI::App& app, const ConfigSource& config);
 void add_evaluate(CLI::App& app, const ConfigSource& config);
 void add_experiments(CLI::App& app, const ConfigSource& config);
+// SUMO co-simulation (docs/sumo.md).
+void add_sumo(CLI::App& app, const ConfigSource& config);
 // Studies: measurements and comparisons beside the pipeline.
 void add_crosscheck(CLI::App& app, const ConfigSource& config);
 void add_label_study(CLI::App& app, const ConfigSource& config);

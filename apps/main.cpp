@@ -41,6 +41,7 @@ void add_commands(CLI::App& app, const GlobalOptions& global) {
   cmd::add_simulate(app, config);
   cmd::add_evaluate(app, config);
   cmd::add_experiments(app, config);
+  cmd::add_sumo(app, config);
   cmd::add_crosscheck(app, config);
   cmd::add_label_study(app, config);
   cmd::add_strategy_study(app, config);

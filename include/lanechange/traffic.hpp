@@ -141,6 +141,13 @@ struct CarTrack {
   std::vector<double> x;
   std::vector<double> v;
   std::vector<double> a;  ///< applied from node k to k + 1; the last repeats
+  /// Per node, whether the car is on the track's lane then (traffic that
+  /// enters, leaves or changes lanes: one track per stay in a lane); empty:
+  /// at every node. Where it is not, x, v and a hold its nearest stay's values.
+  std::vector<char> present;
+  [[nodiscard]] bool present_at(std::size_t node) const {
+    return present.empty() || present[node] != 0;
+  }
 };
 
 /// Every car of a scene over the same grid, in the scene's order.

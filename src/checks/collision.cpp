@@ -25,6 +25,8 @@ std::optional<Collision> first_collision(std::span<const EgoState> ego,
                                 length, width};
       for (CarIndex car = 0; car < others.car_count(); ++car) {
         const CarTrack& track = others.car(car);
+        const auto next = static_cast<std::size_t>(std::min(k + 1, nodes - 1));
+        if (!track.present_at(static_cast<std::size_t>(k)) || !track.present_at(next)) continue;
         const double x = lerp(track.x[k], track.x[std::min(k + 1, nodes - 1)], s);
         const VehicleSize size = scenario.size_of(car);
         if (boxes_collide(ego_box, {x, scenario.lane_center(car), 0.0, size.length, size.width})) {

@@ -85,6 +85,18 @@ std::string animate_transform(const std::string& type, const std::string& vals,
          "\" dur=\"" + dur + "\" calcMode=\"linear\" repeatCount=\"indefinite\"/>";
 }
 
+// A car that enters, leaves or changes lanes is shown only while it is on
+// its track's lane.
+std::string presence(const CarTrack& car, int nodes, const std::string& dur) {
+  if (car.present.empty()) return "";
+  return "<animate attributeName=\"visibility\" values=\"" +
+         values(nodes,
+                [&](int k) {
+                  return car.present_at(static_cast<std::size_t>(k)) ? "visible" : "hidden";
+                }) +
+         "\" dur=\"" + dur + "\" calcMode=\"discrete\" repeatCount=\"indefinite\"/>";
+}
+
 std::string car_body(const VehicleSize& v, const char* fill, const std::string& name,
                      double stroke = 0.08) {
   std::ostringstream out;
@@ -180,6 +192,7 @@ std::string trajectory_animation_svg(const Trajectory& tr, const AnimationOption
                                              num(lane_y);
                                     }),
                              dur)
+        << presence(car, n, dur)
         << car_body(who.size, fill_of(who.id), who.id, frames_gap(tr, who.id) ? 0.3 : 0.08)
         << "</g>\n";
   }

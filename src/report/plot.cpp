@@ -48,8 +48,10 @@ struct Pose {
 struct Snapshot {
   double time = 0.0;
   Pose ego;
-  std::vector<double> car_x;  ///< Trajectory::others' order
+  std::vector<double> car_x;  ///< Trajectory::others' order; kAbsent: not on its lane then
 };
+
+constexpr double kAbsent = std::numeric_limits<double>::quiet_NaN();
 
 struct Range {
   double lo = std::numeric_limits<double>::infinity();
@@ -115,7 +117,10 @@ Snapshot snapshot_at(const Trajectory& tr, double time) {
   const EgoState& a = tr.ego[lo];
   const EgoState& b = tr.ego[hi];
   Snapshot snap{time, {lerp(a.x, b.x, s), lerp(a.y, b.y, s), lerp(a.theta, b.theta, s)}, {}};
-  for (const CarTrack& car : tr.others.cars) snap.car_x.push_back(lerp(car.x[lo], car.x[hi], s));
+  for (const CarTrack& car : tr.others.cars) {
+    const bool there = car.present_at(s < 0.5 ? lo : hi);
+    snap.car_x.push_back(there ? lerp(car.x[lo], car.x[hi], s) : kAbsent);
+  }
   return snap;
 }
 
@@ -123,7 +128,9 @@ std::vector<Snapshot> snapshots(const Trajectory& tr, int count) {
   if (tr.t.size() == 1) {
     const EgoState& e = tr.ego.front();
     Snapshot only{tr.t.front(), {e.x, e.y, e.theta}, {}};
-    for (const CarTrack& car : tr.others.cars) only.car_x.push_back(car.x.front());
+    for (const CarTrack& car : tr.others.cars) {
+      only.car_x.push_back(car.present_at(0) ? car.x.front() : kAbsent);
+    }
     return {only};
   }
   const double first = tr.t.front();
@@ -257,6 +264,7 @@ Range x_range(const Trajectory& tr, const std::vector<Snapshot>& snaps, const Ve
   for (const auto& snap : snaps) {
     for (const Point& p : corners(snap.ego, size)) r.include(p.x);
     for (std::size_t c = 0; c < tr.cars.size(); ++c) {
+      if (std::isnan(snap.car_x[c])) continue;
       for (const Point& p : corners(car_pose(snap, tr, c), tr.cars[c].size)) r.include(p.x);
     }
   }
@@ -366,6 +374,7 @@ void write_cars(std::ostream& out, const Trajectory& tr, const std::vector<Snaps
     write_car(out, snap.ego, size, ego_style(), opacity, object);
     write_time_label(out, snap.ego, 0.0, snap.time);
     for (std::size_t c = 0; c < tr.cars.size(); ++c) {
+      if (std::isnan(snap.car_x[c])) continue;
       const Pose pose = car_pose(snap, tr, c);
       const CarStyle style = style_of(tr, c);
       write_car(out, pose, tr.cars[c].size, style, opacity, object);
@@ -375,7 +384,12 @@ void write_cars(std::ostream& out, const Trajectory& tr, const std::vector<Snaps
   const Snapshot& first = snaps.front();
   write_name(out, first.ego.x, first.ego.y, lane_width, ego_style());
   for (std::size_t c = 0; c < tr.cars.size(); ++c) {
-    write_name(out, first.car_x[c], lane_center(tr.cars[c], lane_width), lane_width,
+    // Named where it is first seen: traffic may enter after the start.
+    const auto seen = std::find_if(snaps.begin(), snaps.end(), [c](const Snapshot& snap) {
+      return !std::isnan(snap.car_x[c]);
+    });
+    if (seen == snaps.end()) continue;
+    write_name(out, seen->car_x[c], lane_center(tr.cars[c], lane_width), lane_width,
                style_of(tr, c));
   }
 }

@@ -63,6 +63,7 @@ void traffic_measures(const Trajectory& t, const Scenario& scene, RolloutMetrics
         continue;
       }
       const CarTrack& track = t.others.car(c);
+      if (!track.present_at(static_cast<std::size_t>(k))) continue;
       const double dx = track.x[static_cast<std::size_t>(k)] - e.x;
       const double gap = scene.bumper_gap(c, dx);
       m.min_gap = std::min(m.min_gap, gap);
@@ -78,13 +79,19 @@ void traffic_measures(const Trajectory& t, const Scenario& scene, RolloutMetrics
 void car_measures(const Trajectory& t, RolloutMetrics& m) {
   const auto n = t.others.car_count();
   for (CarIndex c = 0; c < n; ++c) {
-    for (double a : t.others.car(c).a) m.max_car_decel = std::max(m.max_car_decel, -a);
+    const CarTrack& track = t.others.car(c);
+    for (std::size_t k = 0; k < track.a.size(); ++k) {
+      if (track.present_at(k)) m.max_car_decel = std::max(m.max_car_decel, -track.a[k]);
+    }
   }
   for (int k = 0; k < t.nodes() && !m.cars_collide; ++k) {
     const auto at = static_cast<std::size_t>(k);
     for (CarIndex i = 0; i < n; ++i) {
       for (CarIndex j = 0; j < i; ++j) {
-        if (t.cars[i].lane != t.cars[j].lane) continue;
+        if (t.cars[i].lane != t.cars[j].lane || !t.others.car(i).present_at(at) ||
+            !t.others.car(j).present_at(at)) {
+          continue;
+        }
         const double reach = 0.5 * (t.cars[i].size.length + t.cars[j].size.length);
         if (std::abs(t.others.car(i).x[at] - t.others.car(j).x[at]) < reach) m.cars_collide = true;
       }
@@ -103,10 +110,13 @@ std::string target_lane_slot(const Trajectory& t, const Scenario& scene) {
   const EgoState& e = t.ego.back();
   if (!ends_in_target_lane(t, scene)) return "";
   const auto last = static_cast<std::size_t>(t.nodes() - 1);
-  if (scene.has(Role::Target) && t.others.car(scene.index_of(Role::Target)).x[last] < e.x) {
+  const auto there = [&](Role role) {
+    return scene.has(role) && t.others.car(scene.index_of(role)).present_at(last);
+  };
+  if (there(Role::Target) && t.others.car(scene.index_of(Role::Target)).x[last] < e.x) {
     return "ahead_of_target";
   }
-  if (scene.has(Role::Follower) && t.others.car(scene.index_of(Role::Follower)).x[last] > e.x) {
+  if (there(Role::Follower) && t.others.car(scene.index_of(Role::Follower)).x[last] > e.x) {
     return "behind_follower";
   }
   return "follower_target_gap";
@@ -120,14 +130,18 @@ std::optional<nlohmann::json> gap_taken(const Trajectory& t, const Scenario& sce
   if (!ends_in_target_lane(t, scene)) return std::nullopt;
   const EgoState& e = t.ego.back();
   const auto last = static_cast<std::size_t>(t.nodes() - 1);
-  std::vector<CarState> now;
-  now.reserve(t.others.car_count());
-  for (CarIndex c = 0; c < t.others.car_count(); ++c) {
-    now.push_back({t.others.car(c).x[last], t.others.car(c).v[last], 0.0});
-  }
   const auto id_of = [&](bool ahead) {
-    const auto c = nearest_in_lane(scene, now, Lane::Target, e.x, ahead);
-    return c ? nlohmann::json(scene.cars[*c].id) : nlohmann::json();
+    std::optional<CarIndex> best;
+    for (CarIndex c = 0; c < t.others.car_count(); ++c) {
+      const CarTrack& track = t.others.car(c);
+      if (scene.cars[c].lane != Lane::Target || !track.present_at(last)) continue;
+      const double at = track.x[last];
+      if ((at > e.x) != ahead) continue;
+      if (!best || (ahead ? at < t.others.car(*best).x[last] : at > t.others.car(*best).x[last])) {
+        best = c;
+      }
+    }
+    return best ? nlohmann::json(scene.cars[*best].id) : nlohmann::json();
   };
   return nlohmann::json{{"behind", id_of(false)}, {"ahead", id_of(true)}};
 }

@@ -37,7 +37,7 @@ Trajectory failed_trajectory(std::string planner, const Scenario& scenario, std:
   t.others.dt = t.dt;
   for (CarIndex c = 0; c < scenario.car_count(); ++c) {
     const CarState& car = scenario.car(c);
-    t.others.cars.push_back({{car.x}, {car.v}, {car.a}});
+    t.others.cars.push_back({{car.x}, {car.v}, {car.a}, {}});
   }
   t.cars = tracked_cars(scenario);
   return t;
@@ -112,6 +112,10 @@ json trajectory_to_json(const Trajectory& tr) {
                       {"width", who.size.width},
                       {"x", track.x},
                       {"v", track.v}});
+    if (!track.present.empty()) {
+      json& present = others.back()["present"] = json::array();
+      for (const char p : track.present) present.push_back(p != 0);
+    }
   }
   out["others"] = others;
   out["collision"] = tr.collision;
@@ -126,6 +130,16 @@ CarTrack read_track(const json& car, const std::string& path, std::size_t nodes)
   track.x = read_array(car, path, "x", nodes);
   track.v = read_array(car, path, "v", nodes);
   track.a.assign(nodes, 0.0);
+  const auto present = car.find("present");
+  if (present == car.end()) return track;
+  const std::string field = detail::join_path(path, "present");
+  if (!present->is_array() || present->size() != nodes) {
+    throw InputError(field, "must be an array of one true or false per node");
+  }
+  for (const json& p : *present) {
+    if (!p.is_boolean()) throw InputError(field, "must hold only true or false");
+    track.present.push_back(p.get<bool>() ? 1 : 0);
+  }
   return track;
 }
 

@@ -1,0 +1,100 @@
+// The co-simulation with SUMO: each test is its own process (libsumo holds
+// one simulation per process).
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <string>
+
+#include "lanechange/baselines/baselines.hpp"
+#include "lanechange/error.hpp"
+#include "lanechange/sumo/cosim.hpp"
+#include "lanechange/trajectory.hpp"
+#include "test_helpers.hpp"
+
+namespace lanechange::sumo {
+namespace {
+
+// Traffic on both lanes, in which the expert finds a gap: 30 cars per lane
+// and km, seed 1.
+HighwaySettings busy_highway() {
+  HighwaySettings h;
+  h.density = 30.0;
+  h.seed = 1;
+  return h;
+}
+
+CoSimResult run_miqp(const HighwaySettings& highway, const testing::TempDir& dir) {
+  const Config config = testing::untimed_config();
+  const auto planner = baselines::make_planner("miqp", config);
+  CoSimSettings settings;
+  settings.work_dir = dir.path().string() + "/sumo";
+  return run_highway(*planner, config, highway, settings);
+}
+
+TEST(SumoHighway, TheExpertChangesLanesAndTheCarBehindFollowsTheEgo) {
+  const testing::TempDir dir;
+  const CoSimResult r = run_miqp(busy_highway(), dir);
+  const Trajectory& t = r.rollout.trajectory;
+  ASSERT_EQ(r.rollout.outcome, sim::Outcome::WellPosed) << r.rollout.reason;
+  EXPECT_EQ(r.sumo_collisions, 0);
+  EXPECT_FALSE(t.collision);
+  // The target-lane car nearest behind the ego at the end: SUMO made the ego
+  // its leader (it reacted to the ego), and it stayed behind the ego.
+  const auto last = static_cast<std::size_t>(t.nodes() - 1);
+  const EgoState& ego = t.ego.back();
+  std::optional<CarIndex> behind;
+  for (CarIndex c = 0; c < r.scene.car_count(); ++c) {
+    const CarTrack& track = t.others.car(c);
+    if (r.scene.cars[c].lane != Lane::Target || !track.present_at(last)) continue;
+    if (track.x[last] < ego.x && (!behind || track.x[last] > t.others.car(*behind).x[last])) {
+      behind = c;
+    }
+  }
+  ASSERT_TRUE(behind.has_value()) << "no SUMO car behind the ego in its new lane";
+  const std::string id = r.scene.cars[*behind].id.substr(0, r.scene.cars[*behind].id.find('~'));
+  EXPECT_TRUE(r.followers.count(id) == 1) << id << " never took the ego as its leader";
+  for (std::size_t k = 0; k <= last; ++k) {
+    if (!t.others.car(*behind).present_at(k)) continue;
+    EXPECT_LT(t.others.car(*behind).x[k], t.ego[k].x) << "it passed the ego at node " << k;
+  }
+}
+
+TEST(SumoHighway, SumosEgoIsOursAfterEveryStep) {
+  const testing::TempDir dir;
+  const CoSimResult r = run_miqp(busy_highway(), dir);
+  EXPECT_EQ(r.rollout.steps.size(), r.sumo_step_ms.size());
+  EXPECT_LT(r.max_pose_error, 1e-6);
+  // Every car the planner saw was recorded, one track per stay in a lane.
+  EXPECT_GT(r.scene.car_count(), 0U);
+  EXPECT_EQ(r.rollout.trajectory.others.car_count(), r.scene.car_count());
+}
+
+TEST(SumoHighway, TheRolloutFileReadsBackWithItsAbsentCars) {
+  const testing::TempDir dir;
+  const CoSimResult r = run_miqp(busy_highway(), dir);
+  const std::string path = dir.path().string() + "/rollout.json";
+  sim::save_rollout(r.rollout, path);
+  const Trajectory back = load_trajectory(path);
+  ASSERT_EQ(back.others.car_count(), r.rollout.trajectory.others.car_count());
+  for (CarIndex c = 0; c < back.others.car_count(); ++c) {
+    EXPECT_EQ(back.others.car(c).present, r.rollout.trajectory.others.car(c).present);
+  }
+  const auto plot =
+      testing::run_cli("plot --trajectory " + path + " --out " + dir.path().string() + "/p.png");
+  EXPECT_EQ(plot.exit_code, 0) << plot.output;
+}
+
+TEST(SumoHighway, BadSettingsExitTwoNamingTheOption) {
+  const testing::TempDir dir;
+  for (const std::string bad : {"--density -1", "--lanes 1", "--range 5", "--prediction replay"}) {
+    const auto r =
+        testing::run_cli("sumo --highway " + bad + " --out " + dir.path().string() + "/r.json");
+    EXPECT_EQ(r.exit_code, 2) << bad << ": " << r.output;
+  }
+  const auto r = testing::run_cli("sumo --out " + dir.path().string() + "/r.json");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("--highway"), std::string::npos) << r.output;
+}
+
+}  // namespace
+}  // namespace lanechange::sumo
