@@ -2,6 +2,7 @@
 
 #include <fstream>
 #include <iostream>
+#include <sstream>
 
 #include "commands.hpp"
 #include "lanechange/baselines/baselines.hpp"
@@ -9,6 +10,7 @@
 #include "lanechange/scenario.hpp"
 #include "lanechange/sim/evaluate.hpp"
 #include "lanechange/sim/simulator.hpp"
+#include "lanechange/sumo/evaluate.hpp"
 #include "lanechange/trajectory.hpp"
 #include "team.hpp"
 
@@ -26,6 +28,7 @@ struct SimulateArgs {
 
 struct EvaluateArgs {
   sim::EvaluateOptions options;
+  std::string sumo_highway;  ///< densities, comma-separated: SUMO episodes instead of scenes
   std::string behavior;
   std::string target_lane_cars;
   std::string planners = "miqp";
@@ -45,28 +48,77 @@ void simulate_once(const SimulateArgs& a, const Config& config) {
             << (rollout.reason.empty() ? "" : "; " + rollout.reason) << "\n";
 }
 
-void evaluate_all(EvaluateArgs& a, const Config& config) {
-  sim::EvaluateOptions& o = a.options;
-  o.config = config;
-  o.make_planner = baselines::make_planner;
-  o.behavior = behavior_option(a.behavior);
-  o.planners = planner_list(a.planners);
+// Runs an evaluation on this process's team (MPI ranks, or alone), with
+// progress on rank 0's standard error.
+void run_evaluation(int jobs, const std::string& out_dir,
+                    const std::function<sim::EvaluateReport(const sim::EvaluateRun&)>& evaluate) {
   const auto team = make_team();
   sim::EvaluateRun run;
-  run.jobs = a.jobs;
+  run.jobs = jobs;
   run.team = team.get();
   if (team->rank() == 0) {
     run.progress = &std::cerr;
     run.progress_on_terminal = ::isatty(STDERR_FILENO) != 0;
   }
   run_on_team(*team, [&] {
-    const sim::EvaluateReport r = sim::evaluate(o, run);
+    const sim::EvaluateReport r = evaluate(run);
     if (team->rank() != 0) return;
     std::cerr << "evaluate: " << r.rollouts << " rollouts on rank 0 in " << r.wall_s << " s ("
               << r.shards_skipped << " of " << r.shards_total
-              << " shards were done already or belong to other ranks); see " << o.out_dir
+              << " shards were done already or belong to other ranks); see " << out_dir
               << "/summary.csv\n";
   });
+}
+
+void evaluate_all(EvaluateArgs& a, const Config& config) {
+  sim::EvaluateOptions& o = a.options;
+  o.config = config;
+  o.make_planner = baselines::make_planner;
+  o.behavior = behavior_option(a.behavior);
+  o.planners = planner_list(a.planners);
+  run_evaluation(a.jobs, o.out_dir,
+                 [&o](const sim::EvaluateRun& run) { return sim::evaluate(o, run); });
+}
+
+std::vector<double> densities_of(const std::string& list) {
+  std::vector<double> out;
+  std::stringstream in(list);
+  std::string item;
+  while (std::getline(in, item, ',')) {
+    if (item.empty()) continue;
+    std::size_t used = 0;
+    double d = 0.0;
+    try {
+      d = std::stod(item, &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (used != item.size()) {
+      throw InputError("--sumo-highway",
+                       "\"" + item + "\" is not a number of cars per lane and km");
+    }
+    out.push_back(d);
+  }
+  return out;
+}
+
+// SUMO episodes on the built-in highway: the scene options' count and seed,
+// one group of episodes per density.
+void evaluate_sumo(const EvaluateArgs& a, const Config& config) {
+  const sim::EvaluateOptions& o = a.options;
+  sumo::EvaluateOptions s;
+  s.densities = densities_of(a.sumo_highway);
+  s.count = o.count;
+  s.seed = static_cast<int>(o.seed);
+  s.planners = planner_list(a.planners);
+  s.model_dir = o.model_dir;
+  s.out_dir = o.out_dir;
+  s.shard_size = o.shard_size;
+  s.loop.duration = o.duration;
+  s.config = config;
+  s.make_planner = baselines::make_planner;
+  run_evaluation(a.jobs, s.out_dir,
+                 [&s](const sim::EvaluateRun& run) { return sumo::evaluate(s, run); });
 }
 
 }  // namespace
@@ -106,7 +158,19 @@ void add_evaluate(CLI::App& app, const ConfigSource& config) {
       ->check(CLI::NonNegativeNumber);
   cmd->add_option("--shard-size", o.shard_size, "Scenarios per shard file");
   cmd->add_option("--duration", o.duration, "Seconds per rollout (default: horizon + settle)");
-  cmd->callback([a, config, count, seed, scenes] {
+  auto* sumo_highway = cmd->add_option(
+      "--sumo-highway", a->sumo_highway,
+      "SUMO episodes on the built-in highway instead of scenes (docs/sumo.md): densities in "
+      "cars per lane and km, comma-separated; --count episodes per density, seeds from --seed");
+  sumo_highway->excludes(scenes);
+  cmd->callback([a, config, count, seed, scenes, sumo_highway] {
+    if (sumo_highway->count() > 0) {
+      if (count->count() == 0 || seed->count() == 0) {
+        throw InputError("--count", "SUMO episodes need --count N and --seed S");
+      }
+      evaluate_sumo(*a, config());
+      return;
+    }
     if (scenes->count() == 0 && (count->count() == 0 || seed->count() == 0)) {
       throw InputError("--count", "evaluate needs --count N and --seed S, or --scenarios DIR");
     }

@@ -107,78 +107,6 @@ void validate(const EvaluateOptions& o) {
   o.config.validate();
 }
 
-// Creates the directory and its manifest, or checks that the manifest there
-// is of this very evaluation. Returns true when it is already complete.
-bool prepare(const EvaluateOptions& o, const json& parameters) {
-  const fs::path dir(o.out_dir);
-  const fs::path manifest = dir / kManifest;
-  if (fs::exists(manifest)) {
-    json old;
-    try {
-      old = json::parse(std::ifstream(manifest));
-    } catch (const json::exception&) {
-      throw InputError("--out", manifest.string() + " is not an evaluation manifest");
-    }
-    if (old.value("format", std::string()) != kEvaluationFormat ||
-        old.value("parameters", json()) != parameters) {
-      throw InputError("--out", o.out_dir +
-                                    " holds an evaluation with other parameters; use another "
-                                    "directory or the same command");
-    }
-    return old.value("status", std::string()) == "complete";
-  }
-  std::error_code error;
-  fs::create_directories(dir, error);
-  if (!fs::is_directory(dir)) throw InputError("--out", "cannot create " + o.out_dir);
-  if (!fs::is_empty(dir)) {
-    throw InputError("--out", o.out_dir + " is not empty and holds no evaluation");
-  }
-  lanechange::detail::write_file_atomically(
-      manifest.string(),
-      json{{"format", kEvaluationFormat}, {"status", "incomplete"}, {"parameters", parameters}}
-              .dump(2) +
-          "\n");
-  return false;
-}
-
-// Rollout rows are read back for the summary: ten digits keep them exact
-// enough that a resumed run summarises as an uninterrupted one.
-constexpr int kRolloutDigits = 10;
-
-// The id of the target-lane car behind or ahead of the ego at the end, or ""
-// where it did not end in the target lane or that side was empty.
-std::string gap_car(const Rollout& r, const char* side) {
-  const auto gap = r.trajectory.details.find("gap");
-  if (gap == r.trajectory.details.end() || !gap->contains(side) || !(*gap)[side].is_string()) {
-    return "";
-  }
-  return (*gap)[side].get<std::string>();
-}
-
-std::string rollout_row(long long index, const Scenario& s, const std::string& planner,
-                        const Rollout& r) {
-  const RolloutMetrics& m = r.metrics;
-  std::string row = std::to_string(index) + "," + std::string(to_string(s.behavior)) + "," +
-                    planner + "," + std::string(to_string(r.outcome)) + "," +
-                    (r.trajectory.collision ? "1" : "0") + "," +
-                    (r.collision_at_fault ? "1" : "0") + "," + (m.unsafe_cut_in ? "1" : "0") + "," +
-                    (m.cars_collide ? "1" : "0");
-  for (int v : {m.takeovers, m.fallbacks, m.overruns, m.failures, m.clipped}) {
-    row += ',';
-    row += std::to_string(v);
-  }
-  for (double v :
-       {m.time_to_target_lane >= 0 ? m.time_to_target_lane : NAN, m.min_gap, m.min_ttc,
-        m.max_abs_accel, m.rms_jerk, m.max_abs_omega, m.median_step_ms, m.p99_step_ms,
-        m.max_step_ms, m.first_takeover_t >= 0 ? m.first_takeover_t : NAN, m.forced_decel,
-        m.max_car_decel, m.time_to_lane_line >= 0 ? m.time_to_lane_line : NAN}) {
-    row += ',';
-    row += run::csv_number(v, kRolloutDigits);
-  }
-  return row + "," + m.target_lane_slot + "," + gap_car(r, "behind") + "," + gap_car(r, "ahead") +
-         "," + run::csv_field(r.reason) + "\n";
-}
-
 void write_scene_index(const std::string& out_dir, const SceneFiles& files) {
   std::string text = "index,file\n";
   for (std::size_t i = 0; i < files.names.size(); ++i) {
@@ -222,6 +150,92 @@ std::vector<std::string> rollout_columns() {
           "reason"};
 }
 
+namespace detail {
+
+namespace {
+
+// Rollout rows are read back for the summary: ten digits keep them exact
+// enough that a resumed run summarises as an uninterrupted one.
+constexpr int kRolloutDigits = 10;
+
+// The id of the target-lane car behind or ahead of the ego at the end, or ""
+// where it did not end in the target lane or that side was empty.
+std::string gap_car(const Rollout& r, const char* side) {
+  const auto gap = r.trajectory.details.find("gap");
+  if (gap == r.trajectory.details.end() || !gap->contains(side) || !(*gap)[side].is_string()) {
+    return "";
+  }
+  return (*gap)[side].get<std::string>();
+}
+
+}  // namespace
+
+std::string rollout_row(long long index, std::string_view group, const std::string& planner,
+                        const Rollout& r) {
+  const RolloutMetrics& m = r.metrics;
+  std::string row = std::to_string(index) + "," + std::string(group) + "," + planner + "," +
+                    std::string(to_string(r.outcome)) + "," + (r.trajectory.collision ? "1" : "0") +
+                    "," + (r.collision_at_fault ? "1" : "0") + "," + (m.unsafe_cut_in ? "1" : "0") +
+                    "," + (m.cars_collide ? "1" : "0");
+  for (int v : {m.takeovers, m.fallbacks, m.overruns, m.failures, m.clipped}) {
+    row += ',';
+    row += std::to_string(v);
+  }
+  for (double v :
+       {m.time_to_target_lane >= 0 ? m.time_to_target_lane : NAN, m.min_gap, m.min_ttc,
+        m.max_abs_accel, m.rms_jerk, m.max_abs_omega, m.median_step_ms, m.p99_step_ms,
+        m.max_step_ms, m.first_takeover_t >= 0 ? m.first_takeover_t : NAN, m.forced_decel,
+        m.max_car_decel, m.time_to_lane_line >= 0 ? m.time_to_lane_line : NAN}) {
+    row += ',';
+    row += run::csv_number(v, kRolloutDigits);
+  }
+  return row + "," + m.target_lane_slot + "," + gap_car(r, "behind") + "," + gap_car(r, "ahead") +
+         "," + run::csv_field(r.reason) + "\n";
+}
+
+// Creates the directory and its manifest, or checks that the manifest there
+// is of this very evaluation. Returns true when it is already complete.
+bool prepare_directory(const std::string& out_dir, const json& parameters) {
+  const fs::path dir(out_dir);
+  const fs::path manifest = dir / kManifest;
+  if (fs::exists(manifest)) {
+    json old;
+    try {
+      old = json::parse(std::ifstream(manifest));
+    } catch (const json::exception&) {
+      throw InputError("--out", manifest.string() + " is not an evaluation manifest");
+    }
+    if (old.value("format", std::string()) != kEvaluationFormat ||
+        old.value("parameters", json()) != parameters) {
+      throw InputError("--out", out_dir +
+                                    " holds an evaluation with other parameters; use another "
+                                    "directory or the same command");
+    }
+    return old.value("status", std::string()) == "complete";
+  }
+  std::error_code error;
+  fs::create_directories(dir, error);
+  if (!fs::is_directory(dir)) throw InputError("--out", "cannot create " + out_dir);
+  if (!fs::is_empty(dir)) {
+    throw InputError("--out", out_dir + " is not empty and holds no evaluation");
+  }
+  lanechange::detail::write_file_atomically(
+      manifest.string(),
+      json{{"format", kEvaluationFormat}, {"status", "incomplete"}, {"parameters", parameters}}
+              .dump(2) +
+          "\n");
+  return false;
+}
+
+void mark_complete(const std::string& out_dir, const json& parameters) {
+  const json manifest = {
+      {"format", kEvaluationFormat}, {"status", "complete"}, {"parameters", parameters}};
+  lanechange::detail::write_file_atomically((fs::path(out_dir) / kManifest).string(),
+                                            manifest.dump(2) + "\n");
+}
+
+}  // namespace detail
+
 EvaluateReport evaluate(const EvaluateOptions& o, const EvaluateRun& run) {
   validate(o);
   // Built (and a model loaded) once, before the directory is touched, so an
@@ -238,8 +252,9 @@ EvaluateReport evaluate(const EvaluateOptions& o, const EvaluateRun& run) {
   EvaluateReport report;
   report.shards_total = (count + o.shard_size - 1) / o.shard_size;
   run::Team& team = run::team_or_alone(run.team);
-  if (run::decide_on_rank_zero(team, "--out", [&] { return prepare(o, parameters) ? 1 : 0; }) ==
-      1) {
+  if (run::decide_on_rank_zero(team, "--out", [&] {
+        return detail::prepare_directory(o.out_dir, parameters) ? 1 : 0;
+      }) == 1) {
     report.shards_skipped = report.shards_total;
     return report;
   }
@@ -273,7 +288,7 @@ EvaluateReport evaluate(const EvaluateOptions& o, const EvaluateRun& run) {
                                  : files.scenes[static_cast<std::size_t>(index)];
           for (std::size_t p = 0; p < planners.size(); ++p) {
             const Rollout r = simulate(s, *planners[p], o.config, {o.duration});
-            rows += rollout_row(index, s, o.planners[p], r);
+            rows += detail::rollout_row(index, to_string(s.behavior), o.planners[p], r);
             progress.add(1);
             ++done;
           }
@@ -309,10 +324,7 @@ EvaluateReport evaluate(const EvaluateOptions& o, const EvaluateRun& run) {
       detail::write_human_comparison(o.out_dir,
                                      compare_with_humans(files.scenes, rows, o.planners));
     }
-    json manifest = {
-        {"format", kEvaluationFormat}, {"status", "complete"}, {"parameters", parameters}};
-    lanechange::detail::write_file_atomically((fs::path(o.out_dir) / kManifest).string(),
-                                              manifest.dump(2) + "\n");
+    detail::mark_complete(o.out_dir, parameters);
   }
   report.rollouts = done;
   report.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

@@ -31,9 +31,10 @@ constexpr double kRangeHysteresis = 20.0;
 
 // The planner's scene: the cars around the ego now, as a scene that starts now.
 Scenario scene_of(const Config& config, const EgoState& ego, const std::vector<SumoCar>& cars,
-                  Behavior prediction) {
+                  Behavior prediction, double desired_speed) {
   Scenario s = default_scenario(config);
   s.behavior = prediction;
+  s.idm.desired_speed = desired_speed;
   s.ego = ego;
   for (const SumoCar& car : cars) {
     OtherCar other;
@@ -57,14 +58,15 @@ double step_length(const Config& config) {
 class Episode {
  public:
   Episode(detail::SumoConnection& sumo, detail::RoadFrame frame, const Config& config,
-          const CoSimSettings& settings)
+          const CoSimSettings& settings, double speed_limit)
       : sumo_(sumo),
         frame_(std::move(frame)),
         config_(config),
         settings_(settings),
         keeper_(config),
         settle_(config, config.lane_width),
-        dt_(step_length(config)) {}
+        dt_(step_length(config)),
+        desired_speed_(speed_limit) {}
 
   CoSimResult run(const planner::ClosedLoopPlanner& planner, EgoState ego) {
     ego_ = ego;
@@ -99,7 +101,8 @@ class Episode {
       rollout.steps.push_back(std::move(record));
     }
     path_.controls.push_back(path_.controls.empty() ? EgoControl{} : path_.controls.back());
-    out.scene = tracks_.scene(scene_of(config_, start, {}, settings_.prediction), first_roles_);
+    out.scene = tracks_.scene(scene_of(config_, start, {}, settings_.prediction, desired_speed_),
+                              first_roles_);
     path_.cars = tracked_cars(out.scene);
     path_.others.cars = tracks_.take_tracks(path_.t.size());
     path_.collision = !contacts_.empty();
@@ -119,7 +122,7 @@ class Episode {
     const int steps = static_cast<int>(std::lround(settings_.request_after / dt));
     for (int k = 0; k < steps; ++k) {
       sumo_.cars_near(frame_, ego_.x, settings_.range, near_);
-      scene_ = scene_of(config_, ego_, near_, settings_.prediction);
+      scene_ = scene_of(config_, ego_, near_, settings_.prediction, desired_speed_);
       fill_observation(0);
       sim::StepRecord unused;
       EgoControl u = keep_lane(observation_, false, unused);
@@ -143,7 +146,7 @@ class Episode {
         session && near_.size() == scene_.car_count() &&
         std::all_of(near_.begin(), near_.end(), [&](const SumoCar& c) { return in_scene(c); });
     if (!same) {
-      scene_ = scene_of(config_, ego_, near_, settings_.prediction);
+      scene_ = scene_of(config_, ego_, near_, settings_.prediction, desired_speed_);
       session = planner.start(scene_);
       scene_start_ = k;
       if (k == 0) {
@@ -235,6 +238,7 @@ class Episode {
   detail::TrackRecorder tracks_;
   Trajectory path_;
   double dt_;
+  double desired_speed_;  ///< m/s: of the predicted cars (IDM), the road's speed limit
   bool over_ = false;
   double forced_decel_ = 0.0;
   double max_pose_error_ = 0.0;
@@ -302,7 +306,7 @@ CoSimResult run_highway(const planner::ClosedLoopPlanner& planner, const Config&
   for (int i = 0; i < highway.lanes; ++i) frame.lane_ids.push_back(detail::highway_lane(i));
   const EgoState ego = sumo.insert_ego(frame, highway.ego_position, config.vehicle, config.limits);
   sumo.step();
-  Episode episode(sumo, frame, config, settings);
+  Episode episode(sumo, frame, config, settings, highway.speed_limit);
   return episode.run(planner, ego);
 }
 

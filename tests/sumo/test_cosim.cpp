@@ -7,6 +7,7 @@
 
 #include "lanechange/baselines/baselines.hpp"
 #include "lanechange/error.hpp"
+#include "lanechange/sim/evaluate.hpp"
 #include "lanechange/sumo/cosim.hpp"
 #include "lanechange/trajectory.hpp"
 #include "test_helpers.hpp"
@@ -82,6 +83,34 @@ TEST(SumoHighway, TheRolloutFileReadsBackWithItsAbsentCars) {
   const auto plot =
       testing::run_cli("plot --trajectory " + path + " --out " + dir.path().string() + "/p.png");
   EXPECT_EQ(plot.exit_code, 0) << plot.output;
+}
+
+TEST(SumoEvaluate, WorkerProcessesWriteEveryEpisodeAndAResumeRunsNone) {
+  const testing::TempDir dir;
+  const std::string out = dir.path().string() + "/eval";
+  const std::string command =
+      "evaluate --sumo-highway 15,40 --count 2 --seed 3 --planner "
+      "keep-lane,dwa --jobs 2 --shard-size 1 --out " +
+      out;
+  auto r = testing::run_cli(command);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const std::vector<sim::RolloutRow> rows = sim::read_rollouts(out + "/rollouts.csv");
+  ASSERT_EQ(rows.size(), 8U);  // 2 densities x 2 episodes x 2 planners
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    EXPECT_EQ(rows[i].index, static_cast<long long>(i / 2));
+    EXPECT_EQ(rows[i].behavior, i < 4 ? "highway_15" : "highway_40");
+    // The lane keeper never leaves its lane.
+    if (rows[i].planner == "keep-lane") {
+      EXPECT_EQ(rows[i].outcome, "aborted");
+    }
+  }
+  const std::string before = testing::read_text(out + "/rollouts.csv");
+  r = testing::run_cli(command);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(testing::read_text(out + "/rollouts.csv"), before);
+  r = testing::run_cli("evaluate --sumo-highway 15,x --count 2 --seed 3 --out " + out + "2");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("--sumo-highway"), std::string::npos) << r.output;
 }
 
 TEST(SumoHighway, BadSettingsExitTwoNamingTheOption) {
