@@ -28,7 +28,9 @@ struct SimulateArgs {
 
 struct EvaluateArgs {
   sim::EvaluateOptions options;
-  std::string sumo_highway;  ///< densities, comma-separated: SUMO episodes instead of scenes
+  std::string sumo_highway;     ///< densities, comma-separated: SUMO episodes instead of scenes
+  std::string sumo_commonroad;  ///< a directory of interactive scenario folders
+  bool shard_size_given = false;
   std::string behavior;
   std::string target_lane_cars;
   std::string planners = "miqp";
@@ -108,12 +110,13 @@ void evaluate_sumo(const EvaluateArgs& a, const Config& config) {
   const sim::EvaluateOptions& o = a.options;
   sumo::EvaluateOptions s;
   s.densities = densities_of(a.sumo_highway);
+  s.commonroad_dir = a.sumo_commonroad;
   s.count = o.count;
   s.seed = static_cast<int>(o.seed);
   s.planners = planner_list(a.planners);
   s.model_dir = o.model_dir;
   s.out_dir = o.out_dir;
-  s.shard_size = o.shard_size;
+  if (a.shard_size_given) s.shard_size = o.shard_size;
   s.loop.duration = o.duration;
   s.config = config;
   s.make_planner = baselines::make_planner;
@@ -156,14 +159,24 @@ void add_evaluate(CLI::App& app, const ConfigSource& config) {
   cmd->add_option("--out", o.out_dir, "Output directory; rerun the command to resume")->required();
   cmd->add_option("--jobs", a->jobs, "Worker threads (default: all cores)")
       ->check(CLI::NonNegativeNumber);
-  cmd->add_option("--shard-size", o.shard_size, "Scenarios per shard file");
+  auto* shard_size =
+      cmd->add_option("--shard-size", o.shard_size, "Scenarios per shard file (SUMO episodes: 5)");
   cmd->add_option("--duration", o.duration, "Seconds per rollout (default: horizon + settle)");
   auto* sumo_highway = cmd->add_option(
       "--sumo-highway", a->sumo_highway,
       "SUMO episodes on the built-in highway instead of scenes (docs/sumo.md): densities in "
       "cars per lane and km, comma-separated; --count episodes per density, seeds from --seed");
   sumo_highway->excludes(scenes);
-  cmd->callback([a, config, count, seed, scenes, sumo_highway] {
+  auto* sumo_commonroad = cmd->add_option(
+      "--sumo-commonroad", a->sumo_commonroad,
+      "SUMO episodes of every CommonRoad interactive scenario folder of this directory");
+  sumo_commonroad->excludes(scenes)->excludes(sumo_highway)->excludes(count)->excludes(seed);
+  cmd->callback([a, config, count, seed, scenes, sumo_highway, sumo_commonroad, shard_size] {
+    a->shard_size_given = shard_size->count() > 0;
+    if (sumo_commonroad->count() > 0) {
+      evaluate_sumo(*a, config());
+      return;
+    }
     if (sumo_highway->count() > 0) {
       if (count->count() == 0 || seed->count() == 0) {
         throw InputError("--count", "SUMO episodes need --count N and --seed S");

@@ -17,6 +17,7 @@ struct SumoArgs {
   std::string planner = "miqp";
   std::string model_dir;
   bool highway = false;
+  std::string commonroad;  ///< an interactive scenario folder
   sumo::HighwaySettings road;
   sumo::CoSimSettings loop;
   std::string prediction = "idm";
@@ -24,11 +25,14 @@ struct SumoArgs {
 };
 
 void run_episode(SumoArgs& a, const Config& config) {
-  if (!a.highway) throw InputError("--highway", "name the traffic: --highway");
+  if (a.highway == !a.commonroad.empty()) {
+    throw InputError("--highway", "name the traffic: --highway or --commonroad DIR");
+  }
   a.loop.prediction = behavior_from_string(a.prediction, "--prediction");
   if (a.loop.work_dir.empty()) a.loop.work_dir = a.out_path + ".sumo";
   const auto planner = baselines::make_planner(a.planner, config, a.model_dir);
-  sumo::CoSimResult r = sumo::run_highway(*planner, config, a.road, a.loop);
+  sumo::CoSimResult r = a.highway ? sumo::run_highway(*planner, config, a.road, a.loop)
+                                  : sumo::run_commonroad(*planner, config, a.commonroad, a.loop);
   nlohmann::json& details = r.rollout.trajectory.details;
   details["sumo"] = {{"collisions", r.sumo_collisions},
                      {"scenes", r.scenes},
@@ -54,6 +58,8 @@ void add_sumo(CLI::App& app, const ConfigSource& config) {
   cmd->add_option("--model", a->model_dir,
                   "Model directory (lanechange train), for mlp-miqp and strategy-qp");
   cmd->add_flag("--highway", a->highway, "A straight road with seeded random traffic");
+  cmd->add_option("--commonroad", a->commonroad,
+                  "A CommonRoad interactive scenario folder (NAME.cr.xml, NAME.net.xml, ...)");
   cmd->add_option("--lanes", a->road.lanes, "Lanes of the highway")->capture_default_str();
   cmd->add_option("--length", a->road.length, "Length of the highway, m")->capture_default_str();
   cmd->add_option("--density", a->road.density, "Cars per lane and km")->capture_default_str();

@@ -81,6 +81,20 @@ Projection Polyline::project(Point p) const {
   return best;
 }
 
+Projection Polyline::place(double s, double d, Point& point) const {
+  const auto after = std::upper_bound(s_.begin(), s_.end(), s);
+  const auto from_start = std::max<std::ptrdiff_t>(after - s_.begin() - 1, 0);
+  const std::size_t i = std::min(static_cast<std::size_t>(from_start), points_.size() - 2);
+  const Point a = points_[i];
+  const Point b = points_[i + 1];
+  const double length = s_[i + 1] - s_[i];
+  const double ux = (b.x - a.x) / length;
+  const double uy = (b.y - a.y) / length;
+  const double along = s - s_[i];
+  point = {a.x + along * ux - d * uy, a.y + along * uy + d * ux};
+  return {s, d, std::atan2(uy, ux)};
+}
+
 bool LaneChain::holds(int lanelet) const {
   return std::find(lanelets.begin(), lanelets.end(), lanelet) != lanelets.end();
 }

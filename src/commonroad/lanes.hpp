@@ -21,6 +21,10 @@ class Polyline {
  public:
   explicit Polyline(const std::vector<Point>& points);
   [[nodiscard]] Projection project(Point p) const;
+  /// The point `d` to the left of the line at `s` along it (beyond its ends,
+  /// on the end segments extended), and the line's heading there: the
+  /// inverse of project.
+  [[nodiscard]] Projection place(double s, double d, Point& point) const;
 
  private:
   std::vector<Point> points_;

@@ -17,9 +17,28 @@ std::atomic<bool> loaded{false};
 constexpr int kSpeedModeNone = 0;   // SUMO checks nothing: our ego model moves the ego
 constexpr int kKeepRouteExact = 2;  // moveToXY: exactly there, lateral offset included
 
-double front_x(const EgoState& e, double length) { return e.x + 0.5 * length * std::cos(e.theta); }
-double front_y(const RoadFrame& f, const EgoState& e, double length) {
-  return f.ego_lane_y() + e.y + 0.5 * length * std::sin(e.theta);
+// SUMO's angles run clockwise from north in degrees.
+double heading_of_angle(double degrees) { return (90.0 - degrees) * std::numbers::pi / 180.0; }
+double angle_of_heading(double heading) { return 90.0 - heading * 180.0 / std::numbers::pi; }
+
+WorldPose ego_front(const RoadFrame& f, const EgoState& e, double length) {
+  const WorldPose centre = f.to_world({e.x, e.y, e.theta});
+  return {centre.x + 0.5 * length * std::cos(centre.heading),
+          centre.y + 0.5 * length * std::sin(centre.heading), centre.heading};
+}
+
+// A SUMO car's centre and heading: SUMO gives its front bumper.
+WorldPose centre_of(const std::string& id, double length) {
+  const libsumo::TraCIPosition front = libsumo::Vehicle::getPosition(id);
+  const double heading = heading_of_angle(libsumo::Vehicle::getAngle(id));
+  return {front.x - 0.5 * length * std::cos(heading), front.y - 0.5 * length * std::sin(heading),
+          heading};
+}
+
+void set_up_ego_type(const VehicleSize& size) {
+  libsumo::VehicleType::copy("DEFAULT_VEHTYPE", kEgoId);
+  libsumo::VehicleType::setLength(kEgoId, size.length);
+  libsumo::VehicleType::setWidth(kEgoId, size.width);
 }
 
 }  // namespace
@@ -46,32 +65,67 @@ SumoConnection::~SumoConnection() {
 
 void SumoConnection::step() { libsumo::Simulation::step(); }
 
-double SumoConnection::time() const { return libsumo::Simulation::getTime(); }
+EgoRoad SumoConnection::road_at(double x, double y) const {
+  const libsumo::TraCIRoadPosition at = libsumo::Simulation::convertRoad(x, y, false, "passenger");
+  if (at.edgeID.empty() || at.laneIndex < 0) {
+    throw std::runtime_error("SUMO: no lane near (" + std::to_string(x) + ", " + std::to_string(y) +
+                             ")");
+  }
+  EgoRoad road;
+  road.lane_index = at.laneIndex;
+  road.lanes = libsumo::Edge::getLaneNumber(at.edgeID);
+  std::string lane = at.edgeID + "_" + std::to_string(at.laneIndex);
+  road.lane_width = libsumo::Lane::getWidth(lane);
+  road.speed_limit = libsumo::Lane::getMaxSpeed(lane);
+  const auto add_shape = [&road](const std::string& id) {
+    for (const libsumo::TraCIPosition& p : libsumo::Lane::getShape(id).value) {
+      const bool repeats = !road.centre.empty() && std::hypot(p.x - road.centre.back().x,
+                                                              p.y - road.centre.back().y) < 0.01;
+      if (!repeats) road.centre.push_back({p.x, p.y});
+    }
+  };
+  // A network without loops ends; the bound only guards against one with.
+  for (int hops = 0; hops < 1000 && !lane.empty(); ++hops) {
+    road.edges.push_back(libsumo::Lane::getEdgeID(lane));
+    add_shape(lane);
+    const std::vector<libsumo::TraCIConnection> links = libsumo::Lane::getLinks(lane);
+    if (links.empty()) break;
+    const auto straight =
+        std::find_if(links.begin(), links.end(),
+                     [](const libsumo::TraCIConnection& c) { return c.direction == "s"; });
+    const libsumo::TraCIConnection& next = straight != links.end() ? *straight : links.front();
+    if (!next.approachedInternal.empty()) add_shape(next.approachedInternal);
+    lane = next.approachedLane;
+  }
+  return road;
+}
 
-EgoState SumoConnection::insert_ego(const RoadFrame& frame, double x, const VehicleSize& ego,
-                                    const Limits& limits) {
+EgoState SumoConnection::replace_car_with_ego(const RoadFrame& frame, const std::string& lane_id,
+                                              double front, const VehicleSize& ego,
+                                              const Limits& limits) {
   using libsumo::Vehicle;
-  const auto ids = libsumo::Lane::getLastStepVehicleIDs(
-      frame.lane_ids.at(static_cast<std::size_t>(frame.ego_lane)));
+  const auto ids = libsumo::Lane::getLastStepVehicleIDs(lane_id);
   if (ids.empty())
-    throw std::runtime_error("SUMO: no car on the ego lane to hand its place to the ego");
+    throw std::runtime_error("SUMO: no car on " + lane_id + " to hand its place to the ego");
   std::string nearest = ids.front();
   for (const std::string& id : ids) {
-    if (std::abs(Vehicle::getLanePosition(id) - x) <
-        std::abs(Vehicle::getLanePosition(nearest) - x)) {
+    if (std::abs(Vehicle::getLanePosition(id) - front) <
+        std::abs(Vehicle::getLanePosition(nearest) - front)) {
       nearest = id;
     }
   }
-  const double front = Vehicle::getLanePosition(nearest);
-  const std::string route = Vehicle::getRouteID(nearest);
+  const double length = Vehicle::getLength(nearest);
+  const RoadPose at = frame.to_road(centre_of(nearest, length));
   EgoState e;
+  // Its front where the car's front was.
+  e.x = at.x + 0.5 * (length - ego.length);
   e.v = std::clamp(Vehicle::getSpeed(nearest), limits.v.lo, limits.v.hi);
-  e.x = front - 0.5 * ego.length;
+  const std::string route = Vehicle::getRouteID(nearest);
+  const int lane = Vehicle::getLaneIndex(nearest);
+  const double position = Vehicle::getLanePosition(nearest);
   Vehicle::remove(nearest);
-  libsumo::VehicleType::copy("DEFAULT_VEHTYPE", kEgoId);
-  libsumo::VehicleType::setLength(kEgoId, ego.length);
-  libsumo::VehicleType::setWidth(kEgoId, ego.width);
-  Vehicle::add(kEgoId, route, kEgoId, "now", std::to_string(frame.ego_lane), std::to_string(front),
+  set_up_ego_type(ego);
+  Vehicle::add(kEgoId, route, kEgoId, "now", std::to_string(lane), std::to_string(position),
                std::to_string(e.v));
   Vehicle::setSpeedMode(kEgoId, kSpeedModeNone);
   Vehicle::setLaneChangeMode(kEgoId, 0);
@@ -79,36 +133,45 @@ EgoState SumoConnection::insert_ego(const RoadFrame& frame, double x, const Vehi
   return e;
 }
 
+void SumoConnection::add_ego(const RoadFrame& frame, const std::vector<std::string>& edges,
+                             const EgoState& ego, const VehicleSize& size) {
+  using libsumo::Vehicle;
+  libsumo::Route::add("ego_route", edges);
+  set_up_ego_type(size);
+  Vehicle::add(kEgoId, "ego_route", kEgoId, "now", "best", "base", std::to_string(ego.v));
+  Vehicle::setSpeedMode(kEgoId, kSpeedModeNone);
+  Vehicle::setLaneChangeMode(kEgoId, 0);
+  move_ego(frame, ego, size.length);
+}
+
 void SumoConnection::move_ego(const RoadFrame& frame, const EgoState& e, double ego_length) {
-  const double angle = 90.0 - e.theta * 180.0 / std::numbers::pi;  // SUMO: clockwise from north
-  libsumo::Vehicle::moveToXY(kEgoId, frame.edge, -1, front_x(e, ego_length),
-                             front_y(frame, e, ego_length), angle, kKeepRouteExact);
+  const WorldPose front = ego_front(frame, e, ego_length);
+  libsumo::Vehicle::moveToXY(kEgoId, "", -1, front.x, front.y, angle_of_heading(front.heading),
+                             kKeepRouteExact);
   libsumo::Vehicle::setSpeed(kEgoId, e.v);
 }
 
 double SumoConnection::ego_pose_error(const RoadFrame& frame, const EgoState& e,
                                       double ego_length) const {
   const libsumo::TraCIPosition p = libsumo::Vehicle::getPosition(kEgoId);
-  return std::hypot(p.x - front_x(e, ego_length), p.y - front_y(frame, e, ego_length));
+  const WorldPose front = ego_front(frame, e, ego_length);
+  return std::hypot(p.x - front.x, p.y - front.y);
 }
 
 void SumoConnection::cars_near(const RoadFrame& frame, double x, double reach,
                                std::vector<SumoCar>& out) const {
   using libsumo::Vehicle;
   out.clear();
-  for (const Lane lane : {Lane::Ego, Lane::Target}) {
-    const int index = frame.ego_lane + (lane == Lane::Target ? 1 : 0);
-    for (const std::string& id :
-         libsumo::Lane::getLastStepVehicleIDs(frame.lane_ids.at(static_cast<std::size_t>(index)))) {
-      if (id == kEgoId) continue;
-      const double length = Vehicle::getLength(id);
-      const double centre = Vehicle::getLanePosition(id) - 0.5 * length;
-      if (std::abs(centre - x) > reach) continue;
-      out.push_back({id,
-                     lane,
-                     {centre, Vehicle::getSpeed(id), Vehicle::getAcceleration(id)},
-                     {length, Vehicle::getWidth(id)}});
-    }
+  for (const std::string& id : Vehicle::getIDList()) {
+    if (id == kEgoId) continue;
+    const double length = Vehicle::getLength(id);
+    const RoadPose at = frame.to_road(centre_of(id, length));
+    const auto lane = frame.lane_at(at.y);
+    if (!lane || std::abs(at.x - x) > reach) continue;
+    out.push_back({id,
+                   *lane,
+                   {at.x, Vehicle::getSpeed(id), Vehicle::getAcceleration(id)},
+                   {length, Vehicle::getWidth(id)}});
   }
 }
 
@@ -116,7 +179,9 @@ double SumoConnection::cars_behind_ego(const std::vector<SumoCar>& cars,
                                        std::set<std::string>& followers) const {
   double hardest = 0.0;
   for (const SumoCar& car : cars) {
-    if (libsumo::Vehicle::getLeader(car.id).first != kEgoId) continue;
+    // A car of the ego lane has followed the ego from the start: its
+    // braking is no cut-in's.
+    if (car.lane != Lane::Target || libsumo::Vehicle::getLeader(car.id).first != kEgoId) continue;
     followers.insert(car.id);
     hardest = std::max(hardest, -car.state.a);
   }

@@ -7,6 +7,7 @@
 
 #include "lanechange/config.hpp"
 #include "lanechange/scenario.hpp"
+#include "sumo/road_frame.hpp"
 
 namespace lanechange::sumo::detail {
 
@@ -18,19 +19,23 @@ struct SumoCar {
   VehicleSize size;
 };
 
-/// A straight road along +x: SUMO's lane i is centred at y = (i + 1/2) w.
-struct RoadFrame {
-  std::string edge;
-  std::vector<std::string> lane_ids;  ///< by SUMO lane index
-  int ego_lane = 0;                   ///< SUMO index; the target lane is ego_lane + 1
-  double lane_width = 3.75;
-  [[nodiscard]] double ego_lane_y() const { return (ego_lane + 0.5) * lane_width; }
-};
-
 /// A contact SUMO reported.
 struct SumoContact {
   std::string other;
   bool ego_collider = false;  ///< SUMO names the ego the collider (it ran into the other)
+};
+
+/// The ego's id in SUMO.
+inline constexpr const char* kEgoId = "ego";
+
+/// The road of an ego that starts at a point of SUMO's network.
+struct EgoRoad {
+  std::vector<WorldPoint> centre;  ///< its lane's centre line, on through the lanes it leads to
+  std::vector<std::string> edges;  ///< the route along it
+  int lane_index = 0;              ///< its lane's, 0 the rightmost
+  int lanes = 1;                   ///< of its edge
+  double lane_width = 0.0;
+  double speed_limit = 0.0;
 };
 
 /// Loads a simulation on construction and closes it on destruction.
@@ -43,13 +48,20 @@ class SumoConnection {
   SumoConnection& operator=(const SumoConnection&) = delete;
 
   void step();
-  [[nodiscard]] double time() const;
 
-  /// Puts the ego in place of the SUMO car of `frame.ego_lane` nearest `x`
-  /// (front bumper, m along the road), with that car's speed; returns the
-  /// ego's state in our frame (x its centre), its speed clipped to `limits`.
-  [[nodiscard]] EgoState insert_ego(const RoadFrame& frame, double x, const VehicleSize& ego,
-                                    const Limits& limits);
+  /// The lane of SUMO's network nearest the point, and the lanes it leads to
+  /// (straight on where it forks). std::runtime_error where no lane is near.
+  [[nodiscard]] EgoRoad road_at(double x, double y) const;
+
+  /// Puts the ego in place of the SUMO car on `lane_id` whose front is
+  /// nearest `front` (m along the lane), with that car's speed; returns the
+  /// ego's state in our frame, its speed clipped to `limits`.
+  [[nodiscard]] EgoState replace_car_with_ego(const RoadFrame& frame, const std::string& lane_id,
+                                              double front, const VehicleSize& ego,
+                                              const Limits& limits);
+  /// Adds the ego at `ego` (our frame) on a route of `edges`.
+  void add_ego(const RoadFrame& frame, const std::vector<std::string>& edges, const EgoState& ego,
+               const VehicleSize& size);
   /// Moves the ego to `ego` (our frame) before the next step.
   void move_ego(const RoadFrame& frame, const EgoState& ego, double ego_length);
   /// The distance (m) between SUMO's ego front bumper and ours.
@@ -59,14 +71,12 @@ class SumoConnection {
   /// The cars of the ego and target lanes whose centres are within `reach`
   /// of x, in SUMO's order.
   void cars_near(const RoadFrame& frame, double x, double reach, std::vector<SumoCar>& out) const;
-  /// The cars among `cars` whose leader in SUMO is the ego: their ids are
-  /// added to `followers`; returns their hardest braking (m/s^2, 0: none).
+  /// The target-lane cars among `cars` whose leader in SUMO is the ego (the
+  /// ego cut in ahead of them): their ids are added to `followers`; returns
+  /// their hardest braking (m/s^2, 0: none).
   double cars_behind_ego(const std::vector<SumoCar>& cars, std::set<std::string>& followers) const;
   /// The contacts with the ego SUMO reported in the last step.
   [[nodiscard]] std::vector<SumoContact> ego_contacts() const;
 };
-
-/// The ego's id in SUMO.
-inline constexpr const char* kEgoId = "ego";
 
 }  // namespace lanechange::sumo::detail

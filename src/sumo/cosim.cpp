@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <map>
 #include <memory>
+#include <optional>
 #include <utility>
 
 #include "lanechange/ego.hpp"
@@ -16,6 +17,7 @@
 #include "sim/loop_steps.hpp"
 #include "sumo/connection.hpp"
 #include "sumo/highway.hpp"
+#include "sumo/interactive.hpp"
 #include "sumo/tracks.hpp"
 
 namespace lanechange::sumo {
@@ -31,8 +33,9 @@ constexpr double kRangeHysteresis = 20.0;
 
 // The planner's scene: the cars around the ego now, as a scene that starts now.
 Scenario scene_of(const Config& config, const EgoState& ego, const std::vector<SumoCar>& cars,
-                  Behavior prediction, double desired_speed) {
+                  Behavior prediction, double desired_speed, Side side) {
   Scenario s = default_scenario(config);
+  s.target_side = side;
   s.behavior = prediction;
   s.idm.desired_speed = desired_speed;
   s.ego = ego;
@@ -81,6 +84,7 @@ class Episode {
     path_.planner = std::string(planner.name());
     path_.dt = dt;
     path_.lane_width = config_.lane_width;
+    path_.target_side = frame_.side();
     path_.others.dt = dt;
     const EgoState start = ego_;
     std::unique_ptr<planner::PlannerSession> session;
@@ -101,8 +105,9 @@ class Episode {
       rollout.steps.push_back(std::move(record));
     }
     path_.controls.push_back(path_.controls.empty() ? EgoControl{} : path_.controls.back());
-    out.scene = tracks_.scene(scene_of(config_, start, {}, settings_.prediction, desired_speed_),
-                              first_roles_);
+    out.scene = tracks_.scene(
+        scene_of(config_, start, {}, settings_.prediction, desired_speed_, frame_.side()),
+        first_roles_);
     path_.cars = tracked_cars(out.scene);
     path_.others.cars = tracks_.take_tracks(path_.t.size());
     path_.collision = !contacts_.empty();
@@ -122,7 +127,7 @@ class Episode {
     const int steps = static_cast<int>(std::lround(settings_.request_after / dt));
     for (int k = 0; k < steps; ++k) {
       sumo_.cars_near(frame_, ego_.x, settings_.range, near_);
-      scene_ = scene_of(config_, ego_, near_, settings_.prediction, desired_speed_);
+      scene_ = scene_of(config_, ego_, near_, settings_.prediction, desired_speed_, frame_.side());
       fill_observation(0);
       sim::StepRecord unused;
       EgoControl u = keep_lane(observation_, false, unused);
@@ -146,7 +151,7 @@ class Episode {
         session && near_.size() == scene_.car_count() &&
         std::all_of(near_.begin(), near_.end(), [&](const SumoCar& c) { return in_scene(c); });
     if (!same) {
-      scene_ = scene_of(config_, ego_, near_, settings_.prediction, desired_speed_);
+      scene_ = scene_of(config_, ego_, near_, settings_.prediction, desired_speed_, frame_.side());
       session = planner.start(scene_);
       scene_start_ = k;
       if (k == 0) {
@@ -245,10 +250,9 @@ class Episode {
   std::vector<std::pair<detail::SumoContact, double>> contacts_;
 };
 
-std::vector<std::string> sumo_arguments(const detail::HighwayFiles& files, const HighwaySettings& h,
-                                        double dt, const std::string& dir) {
-  return {"-n", files.network, "-r", files.routes, "--step-length", std::to_string(dt), "--seed",
-          std::to_string(h.seed),
+// SUMO's options beside the network and traffic files.
+std::vector<std::string> sumo_arguments(double dt, int seed, const std::string& dir) {
+  return {"--step-length", std::to_string(dt), "--seed", std::to_string(seed),
           // The sublane model: a straddling ego occupies both lanes, so the
           // cars of both see it, and lateral contacts are checked.
           "--lateral-resolution", "0.8",
@@ -298,15 +302,56 @@ CoSimResult run_highway(const planner::ClosedLoopPlanner& planner, const Config&
   std::filesystem::create_directories(settings.work_dir);
   const detail::HighwayFiles files =
       detail::write_highway(highway, config.lane_width, settings.work_dir);
-  const double dt = step_length(config);
-  detail::SumoConnection sumo(sumo_arguments(files, highway, dt, settings.work_dir));
-  const int settle_steps = static_cast<int>(std::lround(highway.settle_time / dt));
+  std::vector<std::string> args =
+      sumo_arguments(step_length(config), highway.seed, settings.work_dir);
+  args.insert(args.begin(), {"-n", files.network, "-r", files.routes});
+  detail::SumoConnection sumo(args);
+  const int settle_steps = static_cast<int>(std::lround(highway.settle_time / step_length(config)));
   for (int k = 0; k < settle_steps; ++k) sumo.step();
-  detail::RoadFrame frame{detail::kHighwayEdge, {}, highway.ego_lane, config.lane_width};
-  for (int i = 0; i < highway.lanes; ++i) frame.lane_ids.push_back(detail::highway_lane(i));
-  const EgoState ego = sumo.insert_ego(frame, highway.ego_position, config.vehicle, config.limits);
+  const double lane_y = (highway.ego_lane + 0.5) * config.lane_width;
+  const detail::RoadFrame frame({{0.0, lane_y}, {highway.length, lane_y}}, config.lane_width,
+                                Side::Left);
+  const EgoState ego =
+      sumo.replace_car_with_ego(frame, detail::highway_lane(highway.ego_lane), highway.ego_position,
+                                config.vehicle, config.limits);
   sumo.step();
   Episode episode(sumo, frame, config, settings, highway.speed_limit);
+  return episode.run(planner, ego);
+}
+
+CoSimResult run_commonroad(const planner::ClosedLoopPlanner& planner, const Config& config,
+                           const std::string& folder, const CoSimSettings& settings) {
+  validate(settings);
+  std::filesystem::create_directories(settings.work_dir);
+  const detail::InteractiveScenario scenario = detail::read_interactive(folder, settings.work_dir);
+  std::vector<std::string> args = sumo_arguments(step_length(config), 0, settings.work_dir);
+  args.insert(args.begin(), scenario.sumo_files.begin(), scenario.sumo_files.end());
+  // A recorded car whose route SUMO cannot drive (a ramp entered from the
+  // main road) is left out, named in sumo_errors.log, rather than the scenario.
+  args.insert(args.end(), {"--ignore-route-errors", "true"});
+  std::optional<detail::SumoConnection> sumo;
+  try {
+    sumo.emplace(args);
+  } catch (const std::exception& e) {
+    throw InputError(folder, std::string("SUMO cannot load it: ") + e.what());
+  }
+  const commonroad::State& start = scenario.start;
+  const detail::EgoRoad road = sumo->road_at(start.position.x, start.position.y);
+  const bool left = road.lane_index + 1 < road.lanes;
+  if (!left && road.lane_index == 0) {
+    throw InputError(folder, "the planning problem's lane has no neighbour to change to");
+  }
+  // The scene's lane width is the ego lane's own.
+  Config local = config;
+  local.lane_width = road.lane_width;
+  const detail::RoadFrame frame(road.centre, road.lane_width, left ? Side::Left : Side::Right);
+  const detail::RoadPose pose =
+      frame.to_road({start.position.x, start.position.y, start.orientation});
+  EgoState ego{pose.x, pose.y, std::clamp(start.velocity, config.limits.v.lo, config.limits.v.hi),
+               pose.theta, 0.0};
+  sumo->add_ego(frame, road.edges, ego, config.vehicle);
+  sumo->step();
+  Episode episode(*sumo, frame, local, settings, road.speed_limit);
   return episode.run(planner, ego);
 }
 

@@ -5,6 +5,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <filesystem>
 #include <fstream>
@@ -26,14 +27,59 @@ namespace fs = std::filesystem;
 using json = nlohmann::json;
 using Planners = std::vector<std::shared_ptr<const planner::ClosedLoopPlanner>>;
 
+// One episode: a highway of a density and seed, or an interactive folder.
+struct EpisodeSpec {
+  std::string group;
+  HighwaySettings highway;
+  std::string folder;  ///< empty: the highway
+};
+
+// The subfolders holding a NAME.cr.xml, by name; the others are not scenarios.
+std::vector<std::string> interactive_folders(const std::string& dir) {
+  if (!fs::is_directory(dir)) throw InputError("--sumo-commonroad", dir + " is not a folder");
+  std::vector<std::string> out;
+  for (const auto& entry : fs::directory_iterator(dir)) {
+    const std::string name = entry.path().filename().string();
+    if (entry.is_directory() && fs::is_regular_file(entry.path() / (name + ".cr.xml"))) {
+      out.push_back(name);
+    }
+  }
+  std::sort(out.begin(), out.end());
+  if (out.empty()) {
+    throw InputError("--sumo-commonroad", dir + " holds no interactive scenario folder");
+  }
+  return out;
+}
+
+std::vector<EpisodeSpec> episodes_of(const EvaluateOptions& o) {
+  std::vector<EpisodeSpec> out;
+  if (!o.commonroad_dir.empty()) {
+    for (const std::string& name : interactive_folders(o.commonroad_dir)) {
+      out.push_back({"commonroad", o.highway, (fs::path(o.commonroad_dir) / name).string()});
+    }
+    return out;
+  }
+  for (const double density : o.densities) {
+    for (long long i = 0; i < o.count; ++i) {
+      EpisodeSpec e{highway_group(density), o.highway, ""};
+      e.highway.density = density;
+      e.highway.seed = o.seed + static_cast<int>(i);
+      out.push_back(std::move(e));
+    }
+  }
+  return out;
+}
+
 void validate_options(const EvaluateOptions& o) {
-  if (o.densities.empty()) throw InputError("--sumo-highway", "names no density");
+  if (o.densities.empty() == o.commonroad_dir.empty()) {
+    throw InputError("--sumo-highway", "name the traffic: densities or --sumo-commonroad, one");
+  }
   for (const double d : o.densities) {
     HighwaySettings h = o.highway;
     h.density = d;
     validate(h);
   }
-  if (o.count < 1) throw InputError("--count", "must be at least 1");
+  if (o.commonroad_dir.empty() && o.count < 1) throw InputError("--count", "must be at least 1");
   if (o.shard_size < 1) throw InputError("--shard-size", "must be at least 1");
   if (o.planners.empty()) throw InputError("--planner", "names no planner");
   if (o.out_dir.empty()) throw InputError("--out", "must name a directory");
@@ -43,10 +89,15 @@ void validate_options(const EvaluateOptions& o) {
   o.config.validate();
 }
 
-json parameters_of(const EvaluateOptions& o) {
+json parameters_of(const EvaluateOptions& o, const std::vector<EpisodeSpec>& episodes) {
   const HighwaySettings& h = o.highway;
   const CoSimSettings& c = o.loop;
+  json folders = json::array();
+  for (const EpisodeSpec& e : episodes) {
+    if (!e.folder.empty()) folders.push_back(fs::path(e.folder).filename().string());
+  }
   return {{"sumo_highway", o.densities},
+          {"sumo_commonroad", folders},
           {"count", o.count},
           {"seed", o.seed},
           {"planners", o.planners},
@@ -69,20 +120,21 @@ json parameters_of(const EvaluateOptions& o) {
 
 // Runs the shards `shards` (one process), writing each shard file whole.
 void run_shards(const EvaluateOptions& o, const Planners& planners,
-                const std::vector<long long>& shards, const std::string& work_dir) {
-  const long long total = o.count * static_cast<long long>(o.densities.size());
+                const std::vector<EpisodeSpec>& episodes, const std::vector<long long>& shards,
+                const std::string& work_dir) {
+  const auto total = static_cast<long long>(episodes.size());
+  CoSimSettings loop = o.loop;
+  loop.work_dir = work_dir;
   for (const long long shard : shards) {
     std::string rows = sim::detail::csv_header(sim::rollout_columns());
     const long long first = shard * o.shard_size;
     for (long long index = first; index < std::min(total, first + o.shard_size); ++index) {
-      HighwaySettings h = o.highway;
-      h.density = o.densities[static_cast<std::size_t>(index / o.count)];
-      h.seed = o.seed + static_cast<int>(index % o.count);
-      CoSimSettings loop = o.loop;
-      loop.work_dir = work_dir;
+      const EpisodeSpec& e = episodes[static_cast<std::size_t>(index)];
       for (std::size_t p = 0; p < planners.size(); ++p) {
-        const CoSimResult r = run_highway(*planners[p], o.config, h, loop);
-        rows += sim::detail::rollout_row(index, highway_group(h.density), o.planners[p], r.rollout);
+        const CoSimResult r = e.folder.empty()
+                                  ? run_highway(*planners[p], o.config, e.highway, loop)
+                                  : run_commonroad(*planners[p], o.config, e.folder, loop);
+        rows += sim::detail::rollout_row(index, e.group, o.planners[p], r.rollout);
       }
     }
     lanechange::detail::write_file_atomically(
@@ -94,7 +146,8 @@ void run_shards(const EvaluateOptions& o, const Planners& planners,
 // shard files they finish as progress. A worker's error is written to a file
 // and rethrown here.
 void run_in_workers(const EvaluateOptions& o, const Planners& planners,
-                    const std::vector<long long>& todo, int jobs, run::Progress& progress) {
+                    const std::vector<EpisodeSpec>& episodes, const std::vector<long long>& todo,
+                    int jobs, run::Progress& progress) {
   const fs::path work = fs::path(o.out_dir) / "sumo";
   std::vector<pid_t> workers;
   for (int j = 0; j < jobs && j < static_cast<int>(todo.size()); ++j) {
@@ -110,7 +163,7 @@ void run_in_workers(const EvaluateOptions& o, const Planners& planners,
     if (pid == 0) {
       int code = 0;
       try {
-        run_shards(o, planners, mine, dir.string());
+        run_shards(o, planners, episodes, mine, dir.string());
       } catch (const std::exception& e) {
         std::ofstream(dir / "error.txt") << e.what() << "\n";
         code = 1;
@@ -163,9 +216,10 @@ sim::EvaluateReport evaluate(const EvaluateOptions& o, const sim::EvaluateRun& r
   for (const auto& name : o.planners)
     planners.push_back(o.make_planner(name, o.config, o.model_dir));
   const auto start = std::chrono::steady_clock::now();
-  const json parameters = parameters_of(o);
+  const std::vector<EpisodeSpec> episodes = episodes_of(o);
+  const json parameters = parameters_of(o, episodes);
   sim::EvaluateReport report;
-  const long long total = o.count * static_cast<long long>(o.densities.size());
+  const auto total = static_cast<long long>(episodes.size());
   report.shards_total = (total + o.shard_size - 1) / o.shard_size;
   run::Team& team = run::team_or_alone(run.team);
   if (run::decide_on_rank_zero(team, "--out", [&] {
@@ -191,11 +245,11 @@ sim::EvaluateReport evaluate(const EvaluateOptions& o, const sim::EvaluateRun& r
     const std::string dir = (fs::path(o.out_dir) / "sumo" / "worker-0").string();
     fs::create_directories(dir);
     for (const long long s : todo) {
-      run_shards(o, planners, {s}, dir);
+      run_shards(o, planners, episodes, {s}, dir);
       progress.add(1);
     }
   } else {
-    run_in_workers(o, planners, todo, jobs, progress);
+    run_in_workers(o, planners, episodes, todo, jobs, progress);
   }
   progress.finish();
   team.barrier();

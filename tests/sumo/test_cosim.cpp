@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <filesystem>
 #include <string>
 
 #include "lanechange/baselines/baselines.hpp"
@@ -111,6 +112,49 @@ TEST(SumoEvaluate, WorkerProcessesWriteEveryEpisodeAndAResumeRunsNone) {
   r = testing::run_cli("evaluate --sumo-highway 15,x --count 2 --seed 3 --out " + out + "2");
   EXPECT_EQ(r.exit_code, 2) << r.output;
   EXPECT_NE(r.output.find("--sumo-highway"), std::string::npos) << r.output;
+}
+
+const std::string kInteractive = std::string(LANECHANGE_COMMONROAD_DIR) + "/interactive";
+
+std::string listing(const std::string& dir) {
+  std::string out;
+  for (const auto& entry : std::filesystem::directory_iterator(dir)) {
+    out += entry.path().filename().string() + " " + std::to_string(entry.file_size()) + "\n";
+  }
+  return out;
+}
+
+TEST(SumoCommonRoad, AnInteractiveScenarioRunsToAnOutcomeAndIsOnlyRead) {
+  const std::string folder = kInteractive + "/USA_US101-31_1_I-1-1";
+  if (!std::filesystem::is_directory(folder)) GTEST_SKIP() << folder << " is not here";
+  const std::string before = listing(folder);
+  const testing::TempDir dir;
+  const Config config = testing::untimed_config();
+  CoSimSettings settings;
+  settings.work_dir = dir.path().string() + "/sumo";
+  const CoSimResult r =
+      run_commonroad(*baselines::make_planner("miqp", config), config, folder, settings);
+  EXPECT_EQ(r.rollout.steps.size(), r.sumo_step_ms.size());
+  EXPECT_GT(r.scene.car_count(), 0U);
+  // The lane bends a little: SUMO's ego is ours after every step all the same.
+  EXPECT_LT(r.max_pose_error, 1e-6);
+  EXPECT_EQ(listing(folder), before);
+}
+
+TEST(SumoCommonRoad, AFolderWithoutItsScenarioFileExitsTwoNamingIt) {
+  const testing::TempDir dir;
+  const std::string folder = dir.path().string() + "/ONE_1";
+  std::filesystem::create_directories(folder);
+  testing::write_text(folder + "/ONE_1.net.xml", "<net/>");
+  auto r =
+      testing::run_cli("sumo --commonroad " + folder + " --out " + dir.path().string() + "/r.json");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("ONE_1.cr.xml"), std::string::npos) << r.output;
+  testing::write_text(folder + "/ONE_1.cr.xml", "<commonRoad><broken");
+  testing::write_text(folder + "/ONE_1.vehicles.rou.xml", "<routes/>");
+  r = testing::run_cli("sumo --commonroad " + folder + " --out " + dir.path().string() + "/r.json");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_FALSE(std::filesystem::exists(dir.path() / "r.json"));
 }
 
 TEST(SumoHighway, BadSettingsExitTwoNamingTheOption) {

@@ -62,6 +62,16 @@ struct CoSimResult {
                                       const Config& config, const HighwaySettings& highway,
                                       const CoSimSettings& settings);
 
+/// One episode of a CommonRoad interactive scenario folder (NAME.cr.xml,
+/// NAME.net.xml, NAME.vehicles.rou.xml, NAME.add.xml): the ego starts at the
+/// planning problem's initial state and is asked to change to the lane on
+/// its left (to its right where it drives in the leftmost lane); SUMO moves
+/// the recorded cars from their recorded starts. The folder is only read.
+/// InputError naming the folder or file for a malformed one.
+[[nodiscard]] CoSimResult run_commonroad(const planner::ClosedLoopPlanner& planner,
+                                         const Config& config, const std::string& folder,
+                                         const CoSimSettings& settings);
+
 /// Checks the settings; InputError naming the first bad one.
 void validate(const HighwaySettings& highway);
 void validate(const CoSimSettings& settings);

@@ -1,6 +1,7 @@
 #pragma once
 // Many SUMO episodes (docs/sumo.md, "Many episodes"): highway seeds at given
-// densities, each run by every planner named, resumable after a kill, with
+// densities, or every CommonRoad interactive folder of a directory, each run
+// by every planner named, resumable after a kill, with
 // evaluate's rollouts.csv and summary.csv (the behavior column names the
 // traffic: "highway_15" for 15 cars per lane and km).
 #include <string>
@@ -15,7 +16,11 @@ namespace lanechange::sumo {
 struct EvaluateOptions {
   std::vector<double> densities;  ///< cars per lane and km, one group of episodes each
   long long count = 0;            ///< episodes per density
-  int seed = 1;                   ///< episode i of a density has seed + i
+  /// Instead of the highway: one episode per interactive scenario folder
+  /// (a subfolder holding NAME.cr.xml) of this directory, by name; the
+  /// behavior column reads "commonroad".
+  std::string commonroad_dir;
+  int seed = 1;  ///< episode i of a density has seed + i
   std::vector<std::string> planners;
   std::string model_dir;
   std::string out_dir;
