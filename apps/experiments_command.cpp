@@ -54,6 +54,8 @@ void add_experiments(CLI::App& app, const ConfigSource& config) {
   cmd->add_option("--jobs", o.jobs, "Worker threads (default: all cores)")
       ->check(CLI::NonNegativeNumber);
   cmd->add_flag("--no-figures", a->no_figures, "Skip the PNGs (no gnuplot needed)");
+  cmd->add_option("--commonroad", o.commonroad_dir,
+                  "CommonRoad interactive scenario folders to run in SUMO beside the highway");
   cmd->callback([a, config] { run_all(*a, config()); });
 }
 

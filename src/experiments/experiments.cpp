@@ -23,6 +23,7 @@
 #include "lanechange/sampler.hpp"
 #include "lanechange/sim/evaluate.hpp"
 #include "lanechange/sim/simulator.hpp"
+#include "lanechange/sumo/evaluate.hpp"
 
 namespace lanechange::experiments {
 
@@ -36,6 +37,9 @@ constexpr std::uint64_t kDataSeed = 101;
 constexpr std::uint64_t kEvalSeed = 2026;
 // The dense-traffic Table II: cars in the target lane per scene.
 constexpr Interval kDenseTargetLaneCars{4.0, 10.0};
+// SUMO's built-in highway: light and dense traffic, cars per lane and km.
+const std::vector<double> kSumoDensities{15.0, 40.0};
+constexpr int kSumoSeed = 1;
 constexpr std::uint64_t kTrainSeed = 1;
 constexpr double kTestShare = 0.2;  // the paper's 1000 of 5000
 // DAgger's training scenes (docs/dagger.md's seed), and every 2nd step labelled.
@@ -147,6 +151,43 @@ void evaluate_sets(const Context& c, const std::string& parent, const Config& co
     }
     (void)sim::evaluate(e, run);
   }
+}
+
+// Every planner in SUMO traffic: the highway at each density, and the
+// CommonRoad interactive folders where the options name them.
+void evaluate_sumo(const Context& c, const std::vector<std::string>& planners) {
+  sumo::EvaluateOptions e;
+  e.densities = kSumoDensities;
+  e.count = c.sizes.sumo_episodes;
+  e.seed = kSumoSeed;
+  e.planners = planners;
+  e.model_dir = path_in(c, "model");
+  e.config = c.options.config;
+  e.make_planner = baselines::make_planner;
+  sim::EvaluateRun run;
+  run.jobs = c.options.jobs;
+  run.team = &c.team;
+  if (c.team.rank() == 0) {
+    run.progress = c.options.progress;
+    run.progress_on_terminal = c.options.progress_on_terminal;
+  }
+  e.out_dir = path_in(c, "eval/sumo/highway");
+  (void)sumo::evaluate(e, run);
+  if (c.options.commonroad_dir.empty()) return;
+  e.densities.clear();
+  e.commonroad_dir = c.options.commonroad_dir;
+  e.out_dir = path_in(c, "eval/sumo/commonroad");
+  (void)sumo::evaluate(e, run);
+}
+
+std::vector<sim::RolloutRow> read_sumo_rollouts(const Context& c) {
+  std::vector<sim::RolloutRow> rows;
+  for (const char* part : {"highway", "commonroad"}) {
+    const fs::path file = c.dir / "eval" / "sumo" / part / "rollouts.csv";
+    if (!fs::exists(file)) continue;
+    for (auto& row : sim::read_rollouts(file.string())) rows.push_back(std::move(row));
+  }
+  return rows;
 }
 
 std::vector<sim::RolloutRow> read_all_rollouts(const Context& c, const std::string& parent) {
@@ -294,9 +335,9 @@ Scale scale_from_string(std::string_view name, std::string_view field) {
 
 ExperimentSizes sizes_of(Scale scale) {
   switch (scale) {
-    case Scale::Tiny: return {12, 2, true, 20, 2, 1, 3};
-    case Scale::Small: return {150, 20, true, 150, 4, 2, 40};
-    case Scale::Paper: return {5000, 500, false, 300, 4, 4, 150};
+    case Scale::Tiny: return {12, 2, true, 20, 2, 1, 3, 1};
+    case Scale::Small: return {150, 20, true, 150, 4, 2, 40, 10};
+    case Scale::Paper: return {5000, 500, false, 300, 4, 4, 150, 100};
   }
   return {};
 }
@@ -370,6 +411,14 @@ ExperimentReport run_experiments(const ExperimentOptions& o) {
   eval_inputs["target_lane_cars"] = {kDenseTargetLaneCars.lo, kDenseTargetLaneCars.hi};
   (void)stages.run("evaluate-dense", eval_inputs, {"eval/dense"}, StageRunner::Ranks::All,
                    [&] { evaluate_sets(c, "eval/dense", dense, planners); });
+  // And in SUMO's traffic, which reacts and changes lanes (docs/sumo.md).
+  eval_inputs.erase("target_lane_cars");
+  eval_inputs["count"] = c.sizes.sumo_episodes;
+  eval_inputs["sumo_highway"] = kSumoDensities;
+  eval_inputs["seed"] = kSumoSeed;
+  eval_inputs["commonroad"] = o.commonroad_dir.empty() ? json() : json(o.commonroad_dir);
+  (void)stages.run("evaluate-sumo", eval_inputs, {"eval/sumo"}, StageRunner::Ranks::All,
+                   [&] { evaluate_sumo(c, planners); });
   json figure_inputs = {{"evaluation", footprint}, {"labels", labels}};
   if (runs_dagger(c)) {
     figure_inputs["dagger"] = stages.run("dagger",
@@ -425,6 +474,8 @@ ExperimentReport run_experiments(const ExperimentOptions& o) {
   report.paper = read_all_rollouts(c, "eval/paper");
   report.dense = read_all_rollouts(c, "eval/dense");
   report.dense_target_lane_cars = kDenseTargetLaneCars;
+  report.sumo = read_sumo_rollouts(c);
+  report.sumo_densities = kSumoDensities;
   report.car_decel_limit = o.config.traffic.max_decel;
   report.labels = expert_labels;
   if (runs_dagger(c)) {

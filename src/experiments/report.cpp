@@ -2,10 +2,13 @@
 
 #include <sys/utsname.h>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <sstream>
 #include <thread>
+
+#include "lanechange/sumo/evaluate.hpp"
 
 namespace lanechange::experiments {
 
@@ -157,6 +160,35 @@ void dense_section(Document& d, const ReportInputs& in) {
   variant_tables(d, "dense traffic", in.dense, in);
 }
 
+void sumo_section(Document& d, const ReportInputs& in) {
+  d.heading(2, "SUMO traffic (beyond the paper)");
+  std::string densities;
+  for (const double density : in.sumo_densities) {
+    densities += (densities.empty() ? "" : " and ") + sumo::highway_group(density).substr(8);
+  }
+  d.paragraph(
+      "Every planner in traffic that SUMO moves: its cars follow (Krauss), change lanes "
+      "(SL2015) and react to the ego (docs/sumo.md). The built-in highway at " +
+      densities + " cars per lane and km, " + std::to_string(in.sizes.sumo_episodes) +
+      " seeded episodes each (`lanechange evaluate --sumo-highway`); and, where the run names "
+      "them, CommonRoad's interactive scenarios (`--commonroad DIR`: recorded cars from their "
+      "recorded starts). Each rollout starts when the change is asked and lasts the horizon "
+      "plus `closed_loop.settle_time`. An unsafe cut-in made a SUMO car of the target lane "
+      "brake harder than `closed_loop.unsafe_decel`.");
+  std::vector<std::string> groups;
+  for (const auto& r : in.sumo) {
+    if (std::find(groups.begin(), groups.end(), r.behavior) == groups.end())
+      groups.push_back(r.behavior);
+  }
+  for (const std::string& group : groups) {
+    std::vector<sim::RolloutRow> rows;
+    for (const auto& r : in.sumo) {
+      if (r.behavior == group) rows.push_back(r);
+    }
+    table_two(d, 3, "SUMO, " + group, rows, in);
+  }
+}
+
 void dagger_section(Document& d, const ReportInputs& in) {
   const dagger::DaggerOptions& o = in.dagger_options;
   d.heading(2, "DAgger for the action network (beyond the paper)");
@@ -227,6 +259,7 @@ Document build_report(const ReportInputs& in) {
   }
   paper_section(d, in);
   dense_section(d, in);
+  if (!in.sumo.empty()) sumo_section(d, in);
   if (in.dagger) dagger_section(d, in);
   d.heading(2, "Example rollouts");
   if (in.examples.empty()) d.paragraph("No scene of this run qualified as an example.");

@@ -46,7 +46,9 @@ TEST(Experiments, ATinyRunWritesEveryTableAndFigureAndARerunReusesItsStages) {
         "Table II: planners in closed loop (dense traffic)", "rollouts show two other cars",
         "Example rollouts", "85.171%", "93.1%", "DAgger for the action network",
         "fewer take-overs per rollout with every round",
-        "the take-overs from states the network drove to", "taken over at the start"}) {
+        "the take-overs from states the network drove to", "taken over at the start",
+        "SUMO traffic", "Table II: planners in closed loop (SUMO, highway_15)",
+        "Table II: planners in closed loop (SUMO, highway_40)"}) {
     EXPECT_NE(md.find(section), std::string::npos) << section;
   }
   // Every planner has a row in each Table II (the default, the paper's and

@@ -38,6 +38,8 @@ struct ExperimentSizes {
   /// many held-out scenes as Table II has, of all behaviors.
   int dagger_rounds = 0;
   long long dagger_scenes = 0;
+  /// SUMO episodes per density of the built-in highway (docs/sumo.md).
+  long long sumo_episodes = 0;
 };
 [[nodiscard]] ExperimentSizes sizes_of(Scale scale);
 
@@ -56,6 +58,9 @@ struct ExperimentOptions {
   /// their shards over them; rank 0 alone trains, draws and writes the
   /// report. None: this process alone.
   run::Team* team = nullptr;
+  /// A directory of CommonRoad interactive scenario folders, run in SUMO
+  /// beside the built-in highway (docs/sumo.md); empty: the highway alone.
+  std::string commonroad_dir;
 };
 
 struct StageRecord {
