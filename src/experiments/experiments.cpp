@@ -108,6 +108,20 @@ std::vector<std::string> per_behavior_dirs(const Context& c, const std::string& 
   return dirs;
 }
 
+// The options every stage's runs share: the jobs, the team, and progress
+// on rank 0.
+template <class RunOptions>
+RunOptions run_options(const Context& c) {
+  RunOptions run;
+  run.jobs = c.options.jobs;
+  run.team = &c.team;
+  if (c.team.rank() == 0) {
+    run.progress = c.options.progress;
+    run.progress_on_terminal = c.options.progress_on_terminal;
+  }
+  return run;
+}
+
 void generate_sets(const Context& c, const std::string& parent, std::uint64_t seed,
                    long long count) {
   for (std::size_t i = 0; i < kSampledBehaviors.size(); ++i) {
@@ -118,14 +132,7 @@ void generate_sets(const Context& c, const std::string& parent, std::uint64_t se
     g.out_dir = per_behavior_dirs(c, parent)[i];
     g.shard_size = std::max<long long>(1, std::min<long long>(200, count / 4));
     g.config = c.options.config;
-    data::RunOptions run;
-    run.jobs = c.options.jobs;
-    run.team = &c.team;
-    if (c.team.rank() == 0) {
-      run.progress = c.options.progress;
-      run.progress_on_terminal = c.options.progress_on_terminal;
-    }
-    (void)data::generate(g, run);
+    (void)data::generate(g, run_options<data::RunOptions>(c));
   }
 }
 
@@ -142,14 +149,7 @@ void evaluate_sets(const Context& c, const std::string& parent, const Config& co
     e.shard_size = std::max<long long>(1, std::min<long long>(20, e.count / 4));
     e.config = config;
     e.make_planner = baselines::make_planner;
-    sim::EvaluateRun run;
-    run.jobs = c.options.jobs;
-    run.team = &c.team;
-    if (c.team.rank() == 0) {
-      run.progress = c.options.progress;
-      run.progress_on_terminal = c.options.progress_on_terminal;
-    }
-    (void)sim::evaluate(e, run);
+    (void)sim::evaluate(e, run_options<sim::EvaluateRun>(c));
   }
 }
 
@@ -164,13 +164,7 @@ void evaluate_sumo(const Context& c, const std::vector<std::string>& planners) {
   e.model_dir = path_in(c, "model");
   e.config = c.options.config;
   e.make_planner = baselines::make_planner;
-  sim::EvaluateRun run;
-  run.jobs = c.options.jobs;
-  run.team = &c.team;
-  if (c.team.rank() == 0) {
-    run.progress = c.options.progress;
-    run.progress_on_terminal = c.options.progress_on_terminal;
-  }
+  const auto run = run_options<sim::EvaluateRun>(c);
   e.out_dir = path_in(c, "eval/sumo/highway");
   (void)sumo::evaluate(e, run);
   if (c.options.commonroad_dir.empty()) return;

@@ -88,6 +88,7 @@ class Episode {
     path_.others.dt = dt;
     const EgoState start = ego_;
     std::unique_ptr<planner::PlannerSession> session;
+    read_cars();
     for (int k = 0; k <= steps; ++k) {
       if (update_scene(planner, session, k)) ++out.scenes;
       record_node(k);
@@ -139,11 +140,14 @@ class Episode {
     }
   }
 
+  // The cars around the ego now, out to the range and its hysteresis: once
+  // per step, after SUMO's.
+  void read_cars() { sumo_.cars_near(frame_, ego_.x, settings_.range + kRangeHysteresis, near_); }
+
   // A new scene, and a new planner session, where the cars around the ego
   // changed (entered or left the range, or changed lanes). Returns whether it did.
   bool update_scene(const planner::ClosedLoopPlanner& planner,
                     std::unique_ptr<planner::PlannerSession>& session, int k) {
-    sumo_.cars_near(frame_, ego_.x, settings_.range + kRangeHysteresis, near_);
     std::erase_if(near_, [&](const SumoCar& c) {
       return std::abs(c.state.x - ego_.x) > settings_.range && !in_scene(c);
     });
@@ -207,9 +211,8 @@ class Episode {
     for (const detail::SumoContact& c : sumo_.ego_contacts()) {
       contacts_.push_back({c, (k + 1) * dt});
     }
-    std::vector<SumoCar> around;
-    sumo_.cars_near(frame_, ego_.x, settings_.range, around);
-    forced_decel_ = std::max(forced_decel_, sumo_.cars_behind_ego(around, out.followers));
+    read_cars();
+    forced_decel_ = std::max(forced_decel_, sumo_.cars_behind_ego(near_, out.followers));
     return ms;
   }
 
