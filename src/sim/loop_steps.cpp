@@ -64,6 +64,12 @@ EgoControl ask_planner(planner::PlannerSession& session, const planner::Observat
   return d.control;
 }
 
+EgoControl keep_lane(const planner::LaneKeeper& keeper, const planner::Observation& o,
+                     bool target_lane) {
+  return keeper.control(o.ego, target_lane ? o.scene->lane_width : 0.0,
+                        planner::car_ahead(o, target_lane), planner::car_behind(o, target_lane));
+}
+
 bool SettleCheck::settled(const EgoState& ego) {
   if (over_) return true;
   const ClosedLoopSettings& c = config_.closed_loop;

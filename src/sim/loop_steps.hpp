@@ -13,6 +13,11 @@ namespace lanechange::sim::detail {
                                      const planner::Observation& observation, const Config& config,
                                      const planner::LaneKeeper& keeper, StepRecord& record);
 
+/// The lane keeper's control in the ego lane, or the target lane, behind
+/// the car ahead there and ahead of the car behind.
+[[nodiscard]] EgoControl keep_lane(const planner::LaneKeeper& keeper,
+                                   const planner::Observation& observation, bool target_lane);
+
 /// Whether the manoeuvre is over: the ego settled on the target lane's
 /// centre, after which the lane keeper drives it there.
 class SettleCheck {

@@ -67,8 +67,7 @@ class Loop {
 
   EgoControl keep_target_lane(const Observation& o, StepRecord& record) const {
     record.lane_keeping = true;
-    return keeper_.control(o.ego, scene_.lane_width, planner::car_ahead(o, true),
-                           planner::car_behind(o, true));
+    return detail::keep_lane(keeper_, o, true);
   }
 
   EgoControl ask(planner::PlannerSession& session, const Observation& o, StepRecord& record) {

@@ -19,6 +19,17 @@ struct SumoCar {
   VehicleSize size;
 };
 
+/// The car as a scene's car of `behavior`.
+[[nodiscard]] inline OtherCar as_other_car(const SumoCar& car, Behavior behavior) {
+  OtherCar other;
+  other.id = car.id;
+  other.lane = car.lane;
+  other.state = car.state;
+  other.behavior = behavior;
+  other.size = car.size;
+  return other;
+}
+
 /// A contact SUMO reported.
 struct SumoContact {
   std::string other;

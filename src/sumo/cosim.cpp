@@ -39,15 +39,7 @@ Scenario scene_of(const Config& config, const EgoState& ego, const std::vector<S
   s.behavior = prediction;
   s.idm.desired_speed = desired_speed;
   s.ego = ego;
-  for (const SumoCar& car : cars) {
-    OtherCar other;
-    other.id = car.id;
-    other.lane = car.lane;
-    other.state = car.state;
-    other.behavior = prediction;
-    other.size = car.size;
-    s.cars.push_back(std::move(other));
-  }
+  for (const SumoCar& car : cars) s.cars.push_back(as_other_car(car, prediction));
   for (const Role role : kRoles) s.roles[static_cast<std::size_t>(role)] = nearest_in_role(s, role);
   return s;
 }
@@ -175,10 +167,9 @@ class Episode {
   }
 
   void fill_observation(int step) {
-    const double dt = dt_;
     observation_.scene = &scene_;
     observation_.step = step;
-    observation_.t = step * dt;
+    observation_.t = step * dt_;
     observation_.ego = ego_;
     observation_.cars.assign(scene_.car_count(), CarState{});
     for (const SumoCar& c : near_) {
@@ -188,8 +179,7 @@ class Episode {
 
   EgoControl keep_lane(const planner::Observation& o, bool target, sim::StepRecord& record) const {
     record.lane_keeping = true;
-    return keeper_.control(o.ego, target ? scene_.lane_width : 0.0, planner::car_ahead(o, target),
-                           planner::car_behind(o, target));
+    return sim::detail::keep_lane(keeper_, o, target);
   }
 
   EgoControl ask(planner::PlannerSession& session, const planner::Observation& o,

@@ -38,17 +38,15 @@ void TrackRecorder::record(int node, const std::vector<SumoCar>& cars) {
   const auto at = static_cast<std::size_t>(node);
   for (const SumoCar& car : cars) {
     const auto open = open_.find(car.id);
-    const bool continues = open != open_.end() && stays_[open->second].lane == car.lane &&
+    const bool continues = open != open_.end() && stays_[open->second].first.lane == car.lane &&
                            stays_[open->second].last_node == node - 1;
     if (!continues) {
       const int n = ++count_[car.id];
-      Stay stay{n == 1 ? car.id : car.id + "~" + std::to_string(n),
-                car.id,
-                car.lane,
-                car.size,
-                car.state,
-                node,
-                {}};
+      Stay stay{car, node, {}};
+      if (n > 1) {
+        stay.first.id += '~';
+        stay.first.id += std::to_string(n);
+      }
       open_[car.id] = stays_.size();
       stays_.push_back(std::move(stay));
     }
@@ -63,15 +61,7 @@ void TrackRecorder::record(int node, const std::vector<SumoCar>& cars) {
 }
 
 Scenario TrackRecorder::scene(Scenario base, const std::array<std::string, 3>& roles) const {
-  for (const Stay& stay : stays_) {
-    OtherCar car;
-    car.id = stay.id;
-    car.lane = stay.lane;
-    car.state = stay.first;
-    car.behavior = base.behavior;
-    car.size = stay.size;
-    base.cars.push_back(std::move(car));
-  }
+  for (const Stay& stay : stays_) base.cars.push_back(as_other_car(stay.first, base.behavior));
   for (const Role role : kRoles) {
     const std::string& id = roles[static_cast<std::size_t>(role)];
     base.roles[static_cast<std::size_t>(role)] = id.empty() ? std::nullopt : base.find(id);

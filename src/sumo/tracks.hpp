@@ -25,11 +25,9 @@ class TrackRecorder {
 
  private:
   struct Stay {
-    std::string id;  ///< the car's id; a later stay of the same car adds "~2", "~3", ...
-    std::string car;
-    Lane lane = Lane::Ego;
-    VehicleSize size;
-    CarState first;
+    /// The car at the stay's first node; its id is the car's, a later stay
+    /// of the same car adding "~2", "~3", ...
+    SumoCar first;
     int last_node = -1;
     CarTrack track;
   };
