@@ -20,6 +20,7 @@ struct TrainArgs {
   int max_epochs = learn::NetworkSettings{}.max_epochs;
   int network_width = learn::kHiddenWidth;
   int networks = 1;
+  std::string network_inputs = "paper";
   bool plain_naive_bayes = false;
   bool quick = false;
   bool no_plots = false;
@@ -53,6 +54,8 @@ learn::TrainOptions train_options(const TrainArgs& a) {
   o.network.max_epochs = a.max_epochs;
   o.network.hidden_width = a.network_width;
   o.network.networks = a.networks;
+  o.network.inputs =
+      a.network_inputs == "gap" ? learn::NetworkInputs::Gap : learn::NetworkInputs::Paper;
   o.search.naive_bayes_kernel = !a.plain_naive_bayes;
   o.search.quick = a.quick;
   o.plots = !a.no_plots;
@@ -92,6 +95,10 @@ void add_training_options(CLI::App& cmd, TrainArgs& a) {
                  "Action networks trained from their own seeds; the policy acts as their mean "
                  "(an ensemble; DAgger's rounds keep the number)")
       ->check(CLI::Range(1, learn::kMaxNetworks));
+  cmd.add_option("--network-inputs", a.network_inputs,
+                 "What the network reads: paper (the scene's three cars by role) or gap (the "
+                 "ego and the gap it drives to, any number of cars; data of format 4)")
+      ->check(CLI::IsMember({"paper", "gap"}));
   cmd.add_flag("--plain-naive-bayes", a.plain_naive_bayes,
                "One normal per feature and class instead of kernel densities");
   cmd.add_flag("--quick", a.quick, "Smaller hyperparameter grids (tests, smoke runs)");

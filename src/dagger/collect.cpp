@@ -75,8 +75,9 @@ class LearnerSession final : public planner::PlannerSession {
  public:
   LearnerSession(const planner::MlpMiqpPlanner& learner, const Labelling& labelling,
                  std::vector<Query>& sink, std::unique_ptr<planner::PlannerSession> gate,
-                 std::optional<StrategyLabeller> strategy)
+                 std::optional<StrategyLabeller> strategy, expert::GapFrame gap)
       : learner_(learner),
+        gap_(gap),
         labelling_(labelling),
         sink_(sink),
         gate_(std::move(gate)),
@@ -111,7 +112,7 @@ class LearnerSession final : public planner::PlannerSession {
 
  private:
   [[nodiscard]] planner::Decision network_decision(const planner::Observation& o) const {
-    return {learner_.network(o), planner::ActStatus::Planned, ""};
+    return {learner_.network(o, gap_), planner::ActStatus::Planned, ""};
   }
 
   // Drawn at every step, so that a scene's coins do not depend on who drove.
@@ -163,6 +164,7 @@ class LearnerSession final : public planner::PlannerSession {
   void label(const planner::Observation& o) { sink_.push_back(plan_at(o)); }
 
   const planner::MlpMiqpPlanner& learner_;
+  expert::GapFrame gap_;  ///< the gap the learner drives to
   const Labelling& labelling_;
   std::vector<Query>& sink_;
   std::unique_ptr<planner::PlannerSession> gate_;  ///< mlp-miqp's session when gated
@@ -184,7 +186,7 @@ class LearnerPlanner final : public planner::ClosedLoopPlanner {
     if (labelling_.fixed_strategy) strategy.emplace(learner_, scene);
     return std::make_unique<LearnerSession>(learner_, labelling_, sink_,
                                             labelling_.gated ? learner_.start(scene) : nullptr,
-                                            std::move(strategy));
+                                            std::move(strategy), learner_.choose(scene).gap);
   }
 
  private:

@@ -30,6 +30,7 @@ json columns_block() {
           {"classifier_features", classifier_features()},
           {"gap_classifier_features", gap_classifier_features()},
           {"action_inputs", action_inputs()},
+          {"gap_action_inputs", gap_action_inputs()},
           {"action_targets", action_targets()}};
 }
 
@@ -52,6 +53,12 @@ std::string first_difference(const json& existing, const json& requested) {
 
 DirectoryState check_existing(const std::string& dir, const json& parameters) {
   const json manifest = read_manifest(dir);
+  // Shards of another format have other columns: they cannot be continued.
+  if (manifest.at("format").get<std::string>() != kDatasetFormat) {
+    throw InputError("--out", dir + " holds a data set of format " + manifest.at("format").dump() +
+                                  ", which this version reads but does not continue; use a "
+                                  "new directory");
+  }
   const std::string difference = first_difference(manifest.at("parameters"), parameters);
   if (!difference.empty()) {
     throw InputError("--out", dir + " holds another data set (" + difference +
@@ -105,9 +112,11 @@ json read_manifest(const std::string& dir) {
     throw InputError("", dir + " has no " + std::string(kManifestName) + ": not a data set");
   }
   json manifest = lanechange::detail::read_json_file(manifest_path(dir));
-  // Format 2 lacks only the gap columns, which nothing requires: it still reads.
+  // Formats 2 and 3 lack only gap columns, which only the models that use
+  // them require: they still read.
   const std::string format = manifest.is_object() ? manifest.value("format", std::string()) : "";
-  if ((format != kDatasetFormat && format != "lanechange.dataset/2") ||
+  if ((format != kDatasetFormat && format != "lanechange.dataset/2" &&
+       format != "lanechange.dataset/3") ||
       !manifest.contains("parameters") || !manifest["parameters"].is_object()) {
     throw InputError("",
                      manifest_path(dir) + " is not a " + std::string(kDatasetFormat) + " manifest");

@@ -73,9 +73,28 @@ void put_traffic(std::string& out, const Scenario& s, const TrafficPrediction& o
   }
 }
 
+// The plan's own gap as the ego sees it at node k: what a network that
+// drives to a chosen gap observes (format 4).
+void put_gap_view(std::string& out, const Scenario& s, const PlanOutcome& outcome, int k,
+                  std::vector<CarState>& cars) {
+  const TrafficPrediction& others = outcome.trajectory.others;
+  const auto at = static_cast<std::size_t>(k);
+  cars.resize(s.cars.size());
+  for (CarIndex c = 0; c < cars.size(); ++c) {
+    const CarTrack& track = others.car(c);
+    const auto value = [at](const std::vector<double>& series) {
+      return at < series.size() ? series[at] : std::nan("");
+    };
+    cars[c] = {value(track.x), value(track.v), value(track.a)};
+  }
+  const EgoState& ego = outcome.trajectory.ego[at];
+  for (double v : expert::gap_view(s, cars, ego, outcome.gap_frame)) put(out, v);
+}
+
 void put_samples(std::string& out, std::uint64_t index, const Scenario& scenario,
                  const std::string& scene, const PlanOutcome& outcome) {
   const Trajectory& t = outcome.trajectory;
+  std::vector<CarState> cars;
   for (int k = 0; k < t.nodes(); ++k) {
     const EgoState& z = t.ego[k];
     out += std::to_string(index);
@@ -89,6 +108,7 @@ void put_samples(std::string& out, std::uint64_t index, const Scenario& scenario
     const int lanes = at < outcome.lane_modes.size() ? outcome.lane_modes[at] : -1;
     out += ',';
     if (lanes >= 0) out += std::to_string(lanes);
+    put_gap_view(out, scenario, outcome, k, cars);
     out += '\n';
   }
 }
@@ -156,6 +176,8 @@ std::vector<std::string> sample_columns() {
   // Format 2 appends; the columns of format 1 keep their places.
   c.insert(c.end(), traffic_columns().begin(), traffic_columns().end());
   c.emplace_back("lane_mode");
+  // Format 4 appends the plan's gap as the ego sees it at the node.
+  c.insert(c.end(), expert::gap_view_names().begin(), expert::gap_view_names().end());
   return c;
 }
 
@@ -173,6 +195,12 @@ std::vector<std::string> action_inputs() {
   std::vector<std::string> c = scene_columns();
   c.insert(c.end(), {"t", "x", "y", "v", "theta"});
   c.insert(c.end(), traffic_columns().begin(), traffic_columns().end());
+  return c;
+}
+
+std::vector<std::string> gap_action_inputs() {
+  std::vector<std::string> c = {"t", "y", "v", "theta"};
+  c.insert(c.end(), expert::gap_view_names().begin(), expert::gap_view_names().end());
   return c;
 }
 

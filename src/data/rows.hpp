@@ -31,6 +31,7 @@ struct PlanOutcome {
   /// solution, or for a gap further out than the slots reach.
   int gap_slot = -1;
   std::string gap_behind, gap_ahead;  ///< ids of the cars framing it; empty where open
+  expert::GapFrame gap_frame;         ///< the same cars by index
   /// The label of the best plan through each slot's gap alone (label_gaps);
   /// none where the slot has no gap or the labels were not asked for.
   std::array<std::optional<Label>, expert::kGapSlots> slot_labels;
@@ -49,6 +50,9 @@ struct ScenarioRows {
 /// Which sample columns feed which model (written into the manifest).
 [[nodiscard]] std::vector<std::string> classifier_features();
 [[nodiscard]] std::vector<std::string> action_inputs();
+/// The inputs of a network that drives to a chosen gap: the ego's time,
+/// lateral place, speed and heading, and expert::gap_view.
+[[nodiscard]] std::vector<std::string> gap_action_inputs();
 [[nodiscard]] std::vector<std::string> action_targets();
 /// The scene columns that describe it through its gap slots (the gap
 /// classifier's inputs).

@@ -56,6 +56,7 @@ PlanOutcome plan_outcome(const expert::ExpertPlanner& planner, const Scenario& s
       };
       out.gap_behind = id(result.gap.car_behind());
       out.gap_ahead = id(result.gap.car_ahead());
+      out.gap_frame = expert::frame_of(result.gap);
       out.trajectory = std::move(trajectory);
       for (const auto& lanes : result.occupancy) {
         out.lane_modes.push_back(lanes ? static_cast<int>(*lanes) : -1);

@@ -12,16 +12,21 @@ bool same_place(const Gap& a, const Gap& b) {
   return a.car_behind() == b.car_behind() && a.car_ahead() == b.car_ahead();
 }
 
-// A car as the features see it, relative to the ego; none reads as a car
-// `open_side` x kOpenGapDistance away at the ego's speed.
+// A car relative to the ego; none reads as a car `open_side` x
+// kOpenGapDistance away at the ego's speed.
+std::array<double, 3> relative(const CarState* car, const EgoState& ego, double open_side) {
+  if (car == nullptr) return {open_side * kOpenGapDistance, 0.0, 0.0};
+  return {car->x - ego.x, car->v - ego.v, car->a};
+}
+
 void put_car(std::vector<double>& out, const Scenario& s, std::optional<CarIndex> car,
              double open_side) {
-  if (!car) {
-    out.insert(out.end(), {open_side * kOpenGapDistance, 0.0, 0.0});
-    return;
-  }
-  const CarState& c = s.car(*car);
-  out.insert(out.end(), {c.x - s.ego.x, c.v - s.ego.v, c.a});
+  const auto view = relative(car ? &s.car(*car) : nullptr, s.ego, open_side);
+  out.insert(out.end(), view.begin(), view.end());
+}
+
+void add_car_names(std::vector<std::string>& names, const std::string& car) {
+  for (const char* q : {"_dx", "_dv", "_a"}) names.push_back(car + q);
 }
 
 std::vector<CarState> cars_now(const Scenario& s) {
@@ -67,9 +72,7 @@ std::string_view gap_slot_name(int slot) {
 const std::vector<std::string>& gap_feature_names() {
   static const std::vector<std::string> names = [] {
     std::vector<std::string> n = {"ego_v0", "ego_a0"};
-    const auto add_car = [&n](const std::string& car) {
-      for (const char* q : {"_dx", "_dv", "_a"}) n.push_back(car + q);
-    };
+    const auto add_car = [&n](const std::string& car) { add_car_names(n, car); };
     add_car("lane_ahead");
     add_car("lane_behind");
     for (int slot = 0; slot < kGapSlots; ++slot) {
@@ -101,6 +104,28 @@ std::vector<double> gap_features(const Scenario& s, const GapSlots& slots) {
     put_car(out, s, std::nullopt, side);
   }
   return out;
+}
+
+const std::vector<std::string>& gap_view_names() {
+  static const std::vector<std::string> names = [] {
+    std::vector<std::string> n;
+    for (const char* car : {"gap_behind", "gap_ahead", "leader"}) add_car_names(n, car);
+    return n;
+  }();
+  return names;
+}
+
+std::array<double, kGapViewSize> gap_view(const Scenario& scene, std::span<const CarState> cars,
+                                          const EgoState& ego, const GapFrame& frame) {
+  const auto car = [cars](std::optional<CarIndex> c) { return c ? &cars[*c] : nullptr; };
+  const auto leader = nearest_in_lane(scene, cars, Lane::Ego, ego.x, true);
+  std::array<double, kGapViewSize> view{};
+  auto at = view.begin();
+  for (const auto& part : {relative(car(frame.behind), ego, -1.0),
+                           relative(car(frame.ahead), ego, 1.0), relative(car(leader), ego, 1.0)}) {
+    at = std::copy(part.begin(), part.end(), at);
+  }
+  return view;
 }
 
 }  // namespace lanechange::expert

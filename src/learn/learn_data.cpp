@@ -86,7 +86,10 @@ int index_in(const std::array<std::string_view, N>& names, std::string_view valu
 }
 
 std::vector<std::string> names_at(const json& columns, const char* key, const std::string& dir) {
-  if (!columns.contains(key)) throw InputError("", dir + "/manifest.json lists no " + key);
+  if (!columns.contains(key)) {
+    throw InputError("", dir + "/manifest.json lists no " + key +
+                             " (a data set of an older format lacks some: generate it again)");
+  }
   return columns.at(key).get<std::vector<std::string>>();
 }
 
@@ -224,10 +227,11 @@ struct Loader {
 };
 
 // The first data set fixes the columns and config; the others must agree.
-void adopt_or_compare(LearningData& data, const json& manifest, const std::string& dir) {
+void adopt_or_compare(LearningData& data, const json& manifest, const std::string& dir,
+                      const char* network_inputs) {
   const json& columns = manifest.at("columns");
   const auto features = names_at(columns, "classifier_features", dir);
-  const auto inputs = names_at(columns, "action_inputs", dir);
+  const auto inputs = names_at(columns, network_inputs, dir);
   const auto targets = names_at(columns, "action_targets", dir);
   const auto gap_features = columns.value("gap_classifier_features", std::vector<std::string>{});
   const json& config = manifest.at("parameters").at("config");
@@ -253,7 +257,7 @@ void adopt_or_compare(LearningData& data, const json& manifest, const std::strin
 
 }  // namespace
 
-LearningData load_learning_data(const std::vector<std::string>& dirs) {
+LearningData load_learning_data(const std::vector<std::string>& dirs, const char* network_inputs) {
   if (dirs.empty()) throw InputError("--data", "at least one data set is needed");
   LearningData data;
   Loader loader{data, {}, {}, {}, {}, {}, {}};
@@ -261,7 +265,7 @@ LearningData load_learning_data(const std::vector<std::string>& dirs) {
     const data::DatasetSummary summary = data::summarize_dataset(dir);  // checks checksums
     const json manifest = data::read_manifest(dir);
     try {
-      adopt_or_compare(data, manifest, dir);
+      adopt_or_compare(data, manifest, dir, network_inputs);
       loader.features.width = data.classifier_features.size();
       loader.inputs.width = data.action_inputs.size();
       loader.targets.width = data.action_targets.size();

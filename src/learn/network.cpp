@@ -137,6 +137,14 @@ void TrainedNetwork::export_layers(std::vector<Eigen::MatrixXf>& weights,
 
 void TrainedNetwork::save(const std::string& path) const { dlib::serialize(path) << impl->net; }
 
+std::string_view to_string(NetworkInputs inputs) {
+  return inputs == NetworkInputs::Gap ? "gap" : "paper";
+}
+
+const char* manifest_key(NetworkInputs inputs) {
+  return inputs == NetworkInputs::Gap ? "gap_action_inputs" : "action_inputs";
+}
+
 std::uint64_t member_seed(std::uint64_t seed, int member) {
   // Far apart, so that the seed offsets of DAgger's candidates (0, 1, ...) never
   // give two networks of different members the same seed.

@@ -548,6 +548,7 @@ json TrainOptions::config() const {
   // Only an ensemble says so: models and DAgger runs from before ensembles
   // describe (and resume) as before.
   if (network.networks != 1) out["network"]["networks"] = network.networks;
+  if (network.inputs != NetworkInputs::Paper) out["network"]["inputs"] = to_string(network.inputs);
   return out;
 }
 
@@ -555,7 +556,8 @@ TrainReport train_models(const TrainOptions& options) {
   const auto start = Clock::now();
   require_network_count(options.network.networks, "--networks");
   check_out_dir(options.out_dir);
-  const LearningData data = load_learning_data(options.data_dirs);
+  const LearningData data =
+      load_learning_data(options.data_dirs, manifest_key(options.network.inputs));
   const Split split = split_scenarios(data.scenarios.rows(), options.test_share, options.seed);
   const auto [out, staging] = staging_for(options.out_dir);
   fs::create_directories(staging);
@@ -619,7 +621,12 @@ TrainReport retrain_network(const RetrainOptions& options) {
   const auto start = Clock::now();
   check_out_dir(options.out_dir);
   const json base = Model::load(options.base_model).description();
-  const LearningData data = load_learning_data(options.data_dirs);
+  // A retrain reads what its base's network reads.
+  const NetworkInputs inputs =
+      base.at("config").at("network").value("inputs", "paper") == std::string("gap")
+          ? NetworkInputs::Gap
+          : NetworkInputs::Paper;
+  const LearningData data = load_learning_data(options.data_dirs, manifest_key(inputs));
   if (expert_data_config(data.config) != expert_data_config(base.at("expert_config"))) {
     throw InputError("--data", "the data sets' expert config is not the base model's");
   }
@@ -632,6 +639,7 @@ TrainReport retrain_network(const RetrainOptions& options) {
   train.network.hidden_width = base_network.value("hidden_width", kHiddenWidth);
   // An ensemble's rounds are ensembles of its size.
   train.network.networks = base_network.value("networks", 1);
+  train.network.inputs = inputs;
   require_network_count(train.network.networks, options.base_model);
   if (train.network.networks > 1 && !options.warm_start.empty()) {
     throw InputError(options.warm_start,

@@ -63,6 +63,8 @@ std::vector<std::string> names_of(const learn::Model& model, const char* which) 
 
 }  // namespace
 
+// The paper's choice: the SVM's class of the 13 features, and the gap
+// between the follower and the target.
 static MlpMiqpPlanner::SceneClassifier scene_classifier(std::shared_ptr<const learn::Model> model) {
   auto features = std::make_shared<const PolicyInputs>(names_of(*model, "classifier"));
   return [model = std::move(model), features](const Scenario& s) {
@@ -72,57 +74,128 @@ static MlpMiqpPlanner::SceneClassifier scene_classifier(std::shared_ptr<const le
     start.cars.reserve(s.car_count());
     for (const OtherCar& car : s.cars) start.cars.push_back(car.state);
     const Eigen::MatrixXd row = features->read(start).transpose();
-    return model->classify(learn::ClassifierKind::Svm, learn::FeatureSet::Plain, row).front();
+    const int label =
+        model->classify(learn::ClassifierKind::Svm, learn::FeatureSet::Plain, row).front();
+    MlpMiqpPlanner::SceneChoice choice{label != static_cast<int>(Label::Failure), {}};
+    if (s.has_every_role()) {
+      choice.gap = {s.index_of(Role::Follower), s.index_of(Role::Target)};
+    }
+    return choice;
   };
 }
 
-static MlpMiqpPlanner::Network network_of(std::shared_ptr<const learn::Model> model) {
-  auto inputs = std::make_shared<const PolicyInputs>(names_of(*model, "action_inputs"));
-  return [model = std::move(model), inputs](const Observation& o) {
-    const Eigen::Vector2d u = model->policy().act(inputs->read(o));
+// The gap classifier that most often named a gap the expert completes (or
+// rightly none) on the held-out scenes.
+static learn::ClassifierKind best_gap_classifier(const learn::Model& model) {
+  learn::ClassifierKind best = learn::ClassifierKind::Svm;
+  double best_share = -1.0;
+  for (const learn::ClassifierKind kind : learn::kClassifierKinds) {
+    const double share = model.metrics()
+                             .at("gap_classifiers")
+                             .at(std::string(learn::classifier_name(kind)))
+                             .value("completable_share", 0.0);
+    if (share > best_share) {
+      best = kind;
+      best_share = share;
+    }
+  }
+  return best;
+}
+
+// Past the paper: the gap classifier names a slot around the ego (or none),
+// and the network drives to that slot's gap.
+static MlpMiqpPlanner::SceneClassifier gap_classifier(std::shared_ptr<const learn::Model> model) {
+  if (!model->has(learn::FeatureSet::Gaps) ||
+      names_of(*model, "classifier_gaps") != expert::gap_feature_names()) {
+    throw InputError("model",
+                     "the network drives to a chosen gap, and the model has no gap classifier "
+                     "over this version's gap features");
+  }
+  const learn::ClassifierKind kind = best_gap_classifier(*model);
+  return [model = std::move(model), kind](const Scenario& s) {
+    const expert::GapSlots slots = expert::gap_slots(s);
+    const std::vector<double> features = expert::gap_features(s, slots);
+    const Eigen::MatrixXd row =
+        Eigen::Map<const Eigen::RowVectorXd>(features.data(), std::ssize(features));
+    const int slot = model->classify(kind, learn::FeatureSet::Gaps, row).front();
+    MlpMiqpPlanner::SceneChoice choice;
+    if (slot >= 0 && slot < expert::kGapSlots) {
+      if (const auto& gap = slots.gaps[static_cast<std::size_t>(slot)]) {
+        choice = {true, expert::frame_of(*gap)};
+      }
+    }
+    return choice;
+  };
+}
+
+static MlpMiqpPlanner::Network network_of(std::shared_ptr<const learn::Model> model,
+                                          std::shared_ptr<const PolicyInputs> inputs) {
+  return [model = std::move(model), inputs = std::move(inputs)](const Observation& o,
+                                                                const expert::GapFrame& gap) {
+    const Eigen::Vector2d u = model->policy().act(inputs->read(o, gap));
     return EgoControl{u[0], u[1]};
   };
 }
 
 PolicyInputs::PolicyInputs(const std::vector<std::string>& names) {
+  const auto& view = expert::gap_view_names();
   for (const std::string& name : names) {
-    const auto it = input_sources().find(name);
-    if (it == input_sources().end()) {
+    if (const auto it = input_sources().find(name); it != input_sources().end()) {
+      sources_.push_back({&it->second, 0});
+      continue;
+    }
+    const auto at = std::find(view.begin(), view.end(), name);
+    if (at == view.end()) {
       throw InputError("model", "the network wants the input \"" + name +
                                     "\", which an observation does not give");
     }
-    getters_.push_back(&it->second);
+    sources_.push_back({nullptr, static_cast<std::size_t>(at - view.begin())});
+    reads_gap_ = true;
   }
 }
 
-learn::Observation PolicyInputs::read(const Observation& o) const {
-  learn::Observation x(static_cast<Eigen::Index>(getters_.size()));
-  for (std::size_t i = 0; i < getters_.size(); ++i) {
-    x[static_cast<Eigen::Index>(i)] = (*getters_[i])(o);
+learn::Observation PolicyInputs::read(const Observation& o, const expert::GapFrame& gap) const {
+  std::array<double, expert::kGapViewSize> view{};
+  if (reads_gap_) view = expert::gap_view(*o.scene, o.cars, o.ego, gap);
+  learn::Observation x(static_cast<Eigen::Index>(sources_.size()));
+  for (std::size_t i = 0; i < sources_.size(); ++i) {
+    const Source& source = sources_[i];
+    x[static_cast<Eigen::Index>(i)] =
+        source.getter != nullptr ? (*source.getter)(o) : view[source.view];
   }
   return x;
 }
 
 MlpMiqpPlanner::MlpMiqpPlanner(Config config, SceneClassifier classify, Network network,
                                std::shared_ptr<const expert::LaneChangeSolver> solver,
-                               std::string name)
+                               std::string name, bool reads_roles)
     : config_(closed_loop_expert(std::move(config))),
       classify_(std::move(classify)),
       network_(std::move(network)),
       expert_(config_, std::move(solver)),
-      name_(std::move(name)) {}
+      name_(std::move(name)),
+      reads_roles_(reads_roles) {}
+
+static std::shared_ptr<const PolicyInputs> action_inputs_of(const learn::Model& model) {
+  return std::make_shared<const PolicyInputs>(names_of(model, "action_inputs"));
+}
 
 MlpMiqpPlanner::MlpMiqpPlanner(Config config, const std::shared_ptr<const learn::Model>& model,
                                std::shared_ptr<const expert::LaneChangeSolver> solver)
-    : MlpMiqpPlanner(std::move(config), scene_classifier(model), network_of(model),
-                     std::move(solver)) {}
+    : MlpMiqpPlanner(std::move(config), {}, {}, std::move(solver)) {
+  auto inputs = action_inputs_of(*model);
+  reads_roles_ = !inputs->reads_gap();
+  classify_ = reads_roles_ ? scene_classifier(model) : gap_classifier(model);
+  network_ = network_of(model, std::move(inputs));
+}
 
 std::shared_ptr<const MlpMiqpPlanner> make_oracle_mlp_miqp(
     const Config& config, const std::shared_ptr<const learn::Model>& model) {
   auto solver = std::make_shared<expert::FastLaneChangeSolver>();
   auto oracle = std::make_shared<const expert::ExpertPlanner>(closed_loop_expert(config), solver);
   auto keeper = std::make_shared<const LaneKeeper>(oracle->config());
-  MlpMiqpPlanner::Network network = [oracle, keeper](const Observation& o) {
+  MlpMiqpPlanner::Network network = [oracle, keeper](const Observation& o,
+                                                     const expert::GapFrame& /*gap*/) {
     const expert::ExpertResult plan = oracle->plan(scene_now(o, oracle->config()));
     if (plan.status != expert::PlanStatus::Converged || plan.path.controls.empty()) {
       return fallback_control(*keeper, o);
@@ -134,22 +207,24 @@ std::shared_ptr<const MlpMiqpPlanner> make_oracle_mlp_miqp(
                                           std::move(solver), "mlp-miqp-oracle");
 }
 
-bool MlpMiqpPlanner::tries(const Scenario& scene) const {
-  return classify_(scene) != static_cast<int>(Label::Failure);
-}
+bool MlpMiqpPlanner::tries(const Scenario& scene) const { return classify_(scene).tries; }
 
-// The classifier and the network read the paper's three cars; in a scene
-// without one of them the expert drives from the start.
+// A network that reads the paper's three cars cannot read a scene without
+// one of them: there the expert drives from the start.
 std::unique_ptr<PlannerSession> MlpMiqpPlanner::start(const Scenario& scene) const {
-  if (!scene.has_every_role()) return std::make_unique<MlpMiqpSession>(*this, true, true);
-  return std::make_unique<MlpMiqpSession>(*this, tries(scene), false);
+  if (reads_roles_ && !scene.has_every_role()) {
+    return std::make_unique<MlpMiqpSession>(*this, SceneChoice{true, {}}, true);
+  }
+  return std::make_unique<MlpMiqpSession>(*this, choose(scene), false);
 }
 
-MlpMiqpSession::MlpMiqpSession(const MlpMiqpPlanner& planner, bool tries, bool expert_only)
+MlpMiqpSession::MlpMiqpSession(const MlpMiqpPlanner& planner, MlpMiqpPlanner::SceneChoice choice,
+                               bool expert_only)
     : planner_(planner),
+      gap_(choice.gap),
       keeper_(planner.config()),
       expert_(planner.expert(), planner.config()),
-      refused_(!tries),
+      refused_(!choice.tries),
       expert_in_charge_(expert_only),
       expert_only_(expert_only) {}
 
@@ -207,7 +282,7 @@ Decision MlpMiqpSession::refused(const Observation& o) {
 }
 
 EgoControl MlpMiqpSession::network_control(const Observation& o) const {
-  return planner_.network(o);
+  return planner_.network(o, gap_);
 }
 
 namespace {
@@ -219,34 +294,38 @@ std::string network_hit(const Scenario& scene, CarIndex car, double in_seconds) 
 
 // The shortfall is in the reason: the expert's own plans touch these
 // distances, so how far the network misses them says how near it came.
-std::string short_of_safe_distance(Role car, double shortfall) {
-  char what[128];
+std::string short_of_safe_distance(const Scenario& scene, CarIndex car, double shortfall) {
+  char what[160];
   std::snprintf(what, sizeof what,
                 "the network would enter the target lane %.2f m short of the %s's safe distance",
-                shortfall, std::string(to_string(car)).c_str());
+                shortfall, scene.cars[car].id.c_str());
   return what;
 }
 
 // The expert's own rule (Eq. 1): once the ego's body touches the target
-// lane it keeps the safe distance ahead of the follower and behind the
-// target. A network that breaks it is about to cut in where the expert never
-// would; taking over then, before the cut-in, leaves the expert a feasible
-// plan that later would not exist.
-std::string too_close_in_target_lane(const Observation& o, const Scenario& scene) {
+// lane it keeps the safe distance ahead of the gap's car behind and behind
+// its car ahead. A network that breaks it is about to cut in where the
+// expert never would; taking over then, before the cut-in, leaves the
+// expert a feasible plan that later would not exist.
+std::string too_close_in_target_lane(const Observation& o, const Scenario& scene,
+                                     const expert::GapFrame& gap) {
   const double w = scene.lane_width;
   if (o.ego.y + scene.vehicle.width / 2.0 <= w / 2.0) return "";
   const SafetyMargins d = scene.centre_safe_distances();
-  const CarState& follower = o.car(Role::Follower);
-  const CarState& target = o.car(Role::Target);
-  // The gap is the one between the follower and the target: behind the
-  // follower (when it is ahead) is not where the expert changes lanes.
-  const double behind_follower =
-      follower.x + d.follower.standstill + d.follower.time_headway * follower.v - o.ego.x;
-  if (behind_follower > 0.0) return short_of_safe_distance(Role::Follower, behind_follower);
-  // Likewise ahead of the target (when it is behind, passing the ego).
-  const double past_target =
-      o.ego.x + d.target.time_headway * o.ego.v - (target.x - d.target.standstill);
-  if (past_target > 0.0) return short_of_safe_distance(Role::Target, past_target);
+  // Behind the gap's car behind (when it is ahead) is not where the expert
+  // changes lanes; nor ahead of its car ahead (when it is behind).
+  if (gap.behind) {
+    const CarState& behind = o.car(*gap.behind);
+    const double short_by =
+        behind.x + d.follower.standstill + d.follower.time_headway * behind.v - o.ego.x;
+    if (short_by > 0.0) return short_of_safe_distance(scene, *gap.behind, short_by);
+  }
+  if (gap.ahead) {
+    const CarState& ahead = o.car(*gap.ahead);
+    const double short_by =
+        o.ego.x + d.target.time_headway * o.ego.v - (ahead.x - d.target.standstill);
+    if (short_by > 0.0) return short_of_safe_distance(scene, *gap.ahead, short_by);
+  }
   return "";
 }
 
@@ -396,7 +475,7 @@ std::string MlpMiqpSession::check_node(int ahead) {
                   ahead, o.ego.v, o.ego.y);
     return what;
   }
-  if (const std::string close = too_close_in_target_lane(o, scene); !close.empty()) {
+  if (const std::string close = too_close_in_target_lane(o, scene, gap_); !close.empty()) {
     return close + " " + std::to_string(ahead) + " steps ahead";
   }
   // The judge calls a move back towards the ego lane beyond its tolerance

@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "lanechange/expert/gap_slots.hpp"
 #include "lanechange/learn/model.hpp"
 #include "lanechange/traffic.hpp"
 #include "planner/miqp_planner.hpp"
@@ -13,27 +14,45 @@
 namespace lanechange::planner {
 
 /// Reads the network's input columns (by their data-set names) out of an
-/// observation. InputError for a column an observation does not give.
+/// observation and the gap the network drives to (docs/learning.md).
+/// InputError for a column an observation does not give.
 class PolicyInputs {
  public:
   explicit PolicyInputs(const std::vector<std::string>& names);
-  [[nodiscard]] learn::Observation read(const Observation& observation) const;
+  [[nodiscard]] learn::Observation read(const Observation& observation,
+                                        const expert::GapFrame& gap = {}) const;
+  /// Whether some input is relative to the chosen gap (expert::gap_view).
+  [[nodiscard]] bool reads_gap() const { return reads_gap_; }
 
  private:
-  std::vector<const std::function<double(const Observation&)>*> getters_;
+  struct Source {
+    const std::function<double(const Observation&)>* getter = nullptr;
+    std::size_t view = 0;  ///< the index in expert::gap_view without a getter
+  };
+  std::vector<Source> sources_;
+  bool reads_gap_ = false;
 };
 
 class MlpMiqpPlanner final : public ClosedLoopPlanner {
  public:
-  /// The learned parts: the scene's class (Label order) and the network's
-  /// raw control. Const and safe to call from many threads.
-  using SceneClassifier = std::function<int(const Scenario&)>;
-  using Network = std::function<EgoControl(const Observation&)>;
+  /// What the classifier makes of a scene at the start: whether a lane
+  /// change is worth trying, and through which gap.
+  struct SceneChoice {
+    bool tries = false;
+    expert::GapFrame gap;
+  };
+  /// The learned parts: the scene's choice and the network's raw control
+  /// towards the chosen gap. Const and safe to call from many threads.
+  using SceneClassifier = std::function<SceneChoice(const Scenario&)>;
+  using Network = std::function<EgoControl(const Observation&, const expert::GapFrame&)>;
 
   MlpMiqpPlanner(Config config, SceneClassifier classify, Network network,
                  std::shared_ptr<const expert::LaneChangeSolver> solver,
-                 std::string name = "mlp-miqp");
-  /// The SVM (13 features) and the action network of a trained model.
+                 std::string name = "mlp-miqp", bool reads_roles = true);
+  /// A trained model: for a network that reads the paper's three cars, the
+  /// SVM (13 features) and the gap between follower and target; for one
+  /// that drives to a chosen gap, the gap classifier that names the slot
+  /// (the one that named a completable gap most often on held-out scenes).
   MlpMiqpPlanner(Config config, const std::shared_ptr<const learn::Model>& model,
                  std::shared_ptr<const expert::LaneChangeSolver> solver);
   [[nodiscard]] std::string_view name() const override { return name_; }
@@ -43,7 +62,13 @@ class MlpMiqpPlanner final : public ClosedLoopPlanner {
   /// Whether the classifier lets the network try `scene` (Algorithm 1's
   /// first test); a refused scene is left to the fallback.
   [[nodiscard]] bool tries(const Scenario& scene) const;
-  [[nodiscard]] EgoControl network(const Observation& o) const { return network_(o); }
+  [[nodiscard]] SceneChoice choose(const Scenario& scene) const { return classify_(scene); }
+  [[nodiscard]] EgoControl network(const Observation& o, const expert::GapFrame& gap) const {
+    return network_(o, gap);
+  }
+  /// Whether the network reads the paper's three cars by role (a scene
+  /// without one of them is the expert's alone).
+  [[nodiscard]] bool reads_roles() const { return reads_roles_; }
   [[nodiscard]] const expert::ExpertPlanner& expert() const { return expert_; }
 
  private:
@@ -52,6 +77,7 @@ class MlpMiqpPlanner final : public ClosedLoopPlanner {
   Network network_;
   expert::ExpertPlanner expert_;
   std::string name_;
+  bool reads_roles_ = true;
 };
 
 /// `mlp-miqp-oracle`: mlp-miqp with the model's classifier, its check and
@@ -66,7 +92,8 @@ class MlpMiqpPlanner final : public ClosedLoopPlanner {
 class MlpMiqpSession final : public PlannerSession {
  public:
   /// `expert_only`: the expert drives every step (a scene the network cannot read).
-  MlpMiqpSession(const MlpMiqpPlanner& planner, bool tries, bool expert_only);
+  MlpMiqpSession(const MlpMiqpPlanner& planner, MlpMiqpPlanner::SceneChoice choice,
+                 bool expert_only);
   [[nodiscard]] Decision act(const Observation& observation) override;
   /// The look-ahead's predicted observations, one step ahead onwards: the
   /// states the network would drive to. After a check that failed, they end
@@ -100,6 +127,7 @@ class MlpMiqpSession final : public PlannerSession {
   [[nodiscard]] Decision refused(const Observation& observation);
 
   const MlpMiqpPlanner& planner_;
+  expert::GapFrame gap_;  ///< the gap the network drives to
   LaneKeeper keeper_;
   MiqpSession expert_;
   bool refused_ = false;

@@ -16,6 +16,7 @@
 #include "lanechange/learn/train.hpp"
 #include "lanechange/sim/evaluate.hpp"
 #include "lanechange/sim/simulator.hpp"
+#include "scripted_learner.hpp"
 #include "test_helpers.hpp"
 
 namespace lanechange {
@@ -33,9 +34,7 @@ Config small_config() {
 // classifier always says `label`.
 planner::MlpMiqpPlanner constant_learner(const Config& config, EgoControl u,
                                          Label label = Label::WellPosed) {
-  return {config, [label](const Scenario&) { return static_cast<int>(label); },
-          [u](const planner::Observation&) { return u; },
-          std::make_shared<expert::FastLaneChangeSolver>()};
+  return testing::scripted_learner(config, label, [u](const planner::Observation&) { return u; });
 }
 
 // The lines of a CSV file, split into cells (our tables quote nothing).
@@ -108,13 +107,11 @@ TEST(Dagger, FixedStrategyLabelsKeepTheExpertsLaneModes) {
   const planner::MlpMiqpPlanner planning = constant_learner(config, {0.0, 0.0});
   const expert::ExpertResult start = planning.expert().plan(scene);
   ASSERT_EQ(start.status, expert::PlanStatus::Converged);
-  const planner::MlpMiqpPlanner learner(
-      config, [](const Scenario&) { return static_cast<int>(Label::WellPosed); },
-      [&start](const planner::Observation& o) {
+  const planner::MlpMiqpPlanner learner =
+      testing::scripted_learner(config, Label::WellPosed, [&start](const planner::Observation& o) {
         const auto k = std::min(static_cast<std::size_t>(o.step), start.path.controls.size() - 1);
         return EgoControl{start.path.controls[k](0), start.path.controls[k](1)};
-      },
-      std::make_shared<expert::FastLaneChangeSolver>());
+      });
   dagger::detail::Labelling labelling{4, 0, 60.0};
   labelling.fixed_strategy = true;
   const auto queries = dagger::detail::collect_scene(scene, learner, config, labelling);
@@ -273,16 +270,14 @@ TEST(Dagger, AtExpertShareOneTheExpertDrivesEveryStep) {
   const auto expert_driven = dagger::detail::collect_scene(scene, learner, config, mixed);
   ASSERT_GE(expert_driven.size(), 3U);
   const planner::LaneKeeper keeper(config);
-  const planner::MlpMiqpPlanner replay(
-      config, [](const Scenario&) { return static_cast<int>(Label::WellPosed); },
-      [&](const planner::Observation& o) {
+  const planner::MlpMiqpPlanner replay =
+      testing::scripted_learner(config, Label::WellPosed, [&](const planner::Observation& o) {
         const auto step = static_cast<std::size_t>(o.step);
         if (step >= expert_driven.size()) return EgoControl{0.0, 0.0};
         const auto& outcome = expert_driven[step].outcome;
         const bool planned = outcome.status == "converged" && outcome.trajectory.nodes() > 0;
         return planned ? outcome.trajectory.controls[0] : planner::fallback_control(keeper, o);
-      },
-      std::make_shared<expert::FastLaneChangeSolver>());
+      });
   const auto replayed = dagger::detail::collect_scene(scene, replay, config, {1, 1, 60.0});
   EXPECT_TRUE(same_states(visited(expert_driven), visited(replayed)));
   const auto network_driven = dagger::detail::collect_scene(scene, learner, config, {1, 1, 60.0});

@@ -291,6 +291,41 @@ TEST(Generate, GapLabelsNameTheOnlyOpenGap) {
   EXPECT_EQ(std::stod(fields[at("gap_0_behind_dx")]), s.target().x - s.ego.x);
 }
 
+// Each sample sees the plan's own gap from where the ego is at its node:
+// the car behind it by the prediction, the open side far ahead, the leader.
+TEST(Generate, SamplesSeeThePlansGapFromTheEgo) {
+  Scenario s = testing::open_road_scenario();
+  s.ego.v = 10.0;
+  s.leader() = {40.0, 10.0, 0.0};
+  s.follower() = {-24.0, 8.0, 0.0};
+  s.target() = {-10.0, 8.0, 0.0};
+  const expert::ExpertPlanner planner(Config{}, std::make_shared<expert::FastLaneChangeSolver>());
+  const data::PlanOutcome outcome = data::plan_outcome(planner, s, 60.0);
+  ASSERT_EQ(outcome.label, Label::WellPosed) << outcome.reason;
+  const testing::Table samples = [&] {
+    testing::Table t;
+    t.header = data::sample_columns();
+    std::stringstream lines(data::scenario_rows(0, 1, s, outcome).samples);
+    for (std::string line; std::getline(lines, line);) {
+      t.rows.push_back(testing::split_line(line, t.header.size()));
+    }
+    return t;
+  }();
+  const Trajectory& plan = outcome.trajectory;
+  ASSERT_EQ(samples.rows.size(), static_cast<std::size_t>(plan.nodes()));
+  const CarTrack& behind = plan.others.car(car_of(Role::Target));
+  const CarTrack& leader = plan.others.car(car_of(Role::Leader));
+  for (const std::size_t k : {std::size_t{0}, samples.rows.size() - 1}) {
+    const auto& row = samples.rows[k];
+    const auto value = [&](const char* name) { return std::stod(row[samples.column(name)]); };
+    const EgoState& ego = plan.ego[k];
+    EXPECT_DOUBLE_EQ(value("gap_behind_dx"), behind.x[k] - ego.x) << "node " << k;
+    EXPECT_DOUBLE_EQ(value("gap_behind_dv"), behind.v[k] - ego.v) << "node " << k;
+    EXPECT_EQ(value("gap_ahead_dx"), expert::kOpenGapDistance);
+    EXPECT_DOUBLE_EQ(value("leader_dx"), leader.x[k] - ego.x) << "node " << k;
+  }
+}
+
 TEST(Progress, LogLineHasCountsRateAndEta) {
   const std::string line = run::format_progress(50, 200, 10.0, false);
   EXPECT_NE(line.find("50/200"), std::string::npos) << line;

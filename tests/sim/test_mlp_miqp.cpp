@@ -4,6 +4,7 @@
 
 #include "lanechange/sim/simulator.hpp"
 #include "planner/mlp_miqp_planner.hpp"
+#include "scripted_learner.hpp"
 #include "test_helpers.hpp"
 
 namespace lanechange {
@@ -15,10 +16,38 @@ using sim::Outcome;
 
 constexpr int kWorthTrying = static_cast<int>(Label::WellPosed);
 
-MlpMiqpPlanner forced(MlpMiqpPlanner::Network network, int scene_class = kWorthTrying,
+using Drive = testing::ScriptedDrive;
+
+MlpMiqpPlanner forced(Drive drive, int scene_class = kWorthTrying,
                       const Config& config = testing::untimed_config()) {
-  return {config, [scene_class](const Scenario&) { return scene_class; }, std::move(network),
-          std::make_shared<expert::FastLaneChangeSolver>()};
+  return testing::scripted_learner(config, static_cast<Label>(scene_class), std::move(drive));
+}
+
+// A network that drives to a chosen gap reads the gap's two cars and the
+// leader relative to the ego, wherever they are in the scene's list.
+TEST(MlpMiqp, PolicyInputsReadTheChosenGapRelativeToTheEgo) {
+  const Scenario s = testing::dense_scenario(6);
+  Observation o;
+  o.scene = &s;
+  o.ego = s.ego;
+  o.ego.x += 3.0;
+  for (const OtherCar& car : s.cars) o.cars.push_back(car.state);
+  const auto gap = expert::gap_slots(s).gaps[expert::kGapSlotBeside];
+  ASSERT_TRUE(gap && gap->car_behind() && gap->car_ahead());
+  const planner::PolicyInputs inputs({"v", "gap_behind_dx", "gap_ahead_dv", "leader_dx"});
+  EXPECT_TRUE(inputs.reads_gap());
+  const learn::Observation x = inputs.read(o, expert::frame_of(*gap));
+  EXPECT_EQ(x[0], o.ego.v);
+  EXPECT_EQ(x[1], o.car(*gap->car_behind()).x - o.ego.x);
+  EXPECT_EQ(x[2], o.car(*gap->car_ahead()).v - o.ego.v);
+  const auto leader = nearest_in_lane(s, o.cars, Lane::Ego, o.ego.x, true);
+  ASSERT_TRUE(leader);
+  EXPECT_EQ(x[3], o.car(*leader).x - o.ego.x);
+  // A gap open on both sides reads as cars far behind and far ahead.
+  const learn::Observation open = inputs.read(o, {});
+  EXPECT_EQ(open[1], -expert::kOpenGapDistance);
+  EXPECT_FALSE(planner::PolicyInputs({"v", "follower_x"}).reads_gap());
+  EXPECT_THROW(planner::PolicyInputs({"gap_beside_dx"}), InputError);
 }
 
 // A "network" that steers hard into the target lane whatever is there.
@@ -148,8 +177,8 @@ TEST(MlpMiqp, ARefusalCheckCutShortByItsTimeLimitIsRepeatedAtOnce) {
     config.closed_loop.step_budget_ms = budget_ms;
     config.closed_loop.deadline = Deadline::WallClock;
     int calls = 0;
-    const MlpMiqpPlanner p(
-        config, [](const Scenario&) { return static_cast<int>(Label::Failure); },
+    const MlpMiqpPlanner p = testing::scripted_learner(
+        config, Label::Failure,
         [&calls](const Observation& o) {
           ++calls;
           return swerve_left(o);
@@ -209,7 +238,7 @@ TEST(MlpMiqp, AKeptLookAheadDecidesAsARolledOutOne) {
   const double w = testing::open_road_scenario().lane_width;
   struct Case {
     Scenario scene;
-    MlpMiqpPlanner::Network network;
+    Drive network;
   };
   const std::vector<Case> cases = {
       {testing::open_road_scenario(),

@@ -20,7 +20,7 @@
 
 namespace lanechange::data {
 
-inline constexpr std::string_view kDatasetFormat = "lanechange.dataset/3";
+inline constexpr std::string_view kDatasetFormat = "lanechange.dataset/4";
 inline constexpr std::string_view kManifestName = "manifest.json";
 
 /// Everything that fixes a data set's content. Two runs with equal options

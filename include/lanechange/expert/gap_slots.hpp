@@ -5,6 +5,7 @@
 // (docs/dataset.md, "Gaps").
 #include <array>
 #include <optional>
+#include <span>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -48,5 +49,27 @@ struct GapSlots {
 /// ego's speed; a slot without a gap reads as a gap of no length that far
 /// out, behind or ahead.
 [[nodiscard]] std::vector<double> gap_features(const Scenario& scenario, const GapSlots& slots);
+
+/// The two cars that frame the gap a lane change drives to; none where the
+/// gap is open that way.
+struct GapFrame {
+  std::optional<CarIndex> behind, ahead;
+  bool operator==(const GapFrame&) const = default;
+};
+[[nodiscard]] inline GapFrame frame_of(const Gap& gap) {
+  return {gap.car_behind(), gap.car_ahead()};
+}
+
+/// What a network that drives to one gap sees of the traffic at an instant,
+/// relative to the ego: the gap's two framing cars and the nearest car ahead
+/// in the ego lane, each as distance ahead, speed relative to the ego and
+/// acceleration (an open side reads as gap_features reads it). The same
+/// nine numbers for any number of cars.
+inline constexpr std::size_t kGapViewSize = 9;
+[[nodiscard]] const std::vector<std::string>& gap_view_names();
+/// `cars`: every car of `scene` as it stands now, in the scene's order.
+[[nodiscard]] std::array<double, kGapViewSize> gap_view(const Scenario& scene,
+                                                        std::span<const CarState> cars,
+                                                        const EgoState& ego, const GapFrame& frame);
 
 }  // namespace lanechange::expert

@@ -96,7 +96,11 @@ struct LearningData {
 /// Reads and checks (row counts, checksums: summarize_dataset) the data sets.
 /// InputError when one is missing or damaged, when they disagree on the
 /// columns or the expert config, or when a needed column is absent.
-[[nodiscard]] LearningData load_learning_data(const std::vector<std::string>& dirs);
+/// `network_inputs` names the manifest's list of the action network's input
+/// columns ("action_inputs" or "gap_action_inputs"); a data set without it
+/// is an InputError.
+[[nodiscard]] LearningData load_learning_data(const std::vector<std::string>& dirs,
+                                              const char* network_inputs = "action_inputs");
 
 /// Rows of ScenarioTable on each side.
 struct Split {

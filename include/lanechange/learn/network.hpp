@@ -9,11 +9,20 @@
 #include <memory>
 #include <ostream>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "lanechange/learn/policy.hpp"
 
 namespace lanechange::learn {
+
+/// What the action network reads (docs/learning.md): the paper's scene and
+/// three cars by role (the data sets' `action_inputs`), or the ego and the
+/// gap it drives to (`gap_action_inputs`: any number of cars, format 4).
+enum class NetworkInputs { Paper, Gap };
+[[nodiscard]] std::string_view to_string(NetworkInputs inputs);
+/// The data sets' manifest key of the input column names.
+[[nodiscard]] const char* manifest_key(NetworkInputs inputs);
 
 /// An ensemble's size bound: a policy's act() runs every member.
 inline constexpr int kMaxNetworks = 16;
@@ -30,6 +39,7 @@ struct NetworkSettings {
   /// initial weights and batch order (member_seed), trained on the same rows; the policy
   /// acts as their mean. 1: the paper's single network.
   int networks = 1;
+  NetworkInputs inputs = NetworkInputs::Paper;
 };
 
 /// The seed of an ensemble's k-th network; member 0 keeps `seed`, so that a one-network
