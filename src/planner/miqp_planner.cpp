@@ -126,6 +126,7 @@ std::string MiqpSession::replan(const Observation& o) {
   }
   plan_ = result.path;
   modes_ = result.modes;
+  plan_gap_ = expert::frame_of(result.gap);
   plan_step_ = o.step;
   return "";
 }

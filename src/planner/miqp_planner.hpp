@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "lanechange/expert/gap_slots.hpp"
 #include "lanechange/expert/planner.hpp"
 #include "lanechange/planner/planner.hpp"
 
@@ -44,6 +45,8 @@ class MiqpSession final : public PlannerSession {
   [[nodiscard]] double last_plan_ms() const { return last_plan_ms_; }
   /// How the last re-plan ended; Converged before the first.
   [[nodiscard]] expert::PlanStatus last_status() const { return last_status_; }
+  /// The gap of the plan it follows (by the observation's car indices).
+  [[nodiscard]] const expert::GapFrame& plan_gap() const { return plan_gap_; }
 
  private:
   /// Re-plans from the observation; returns why it failed ("" on success).
@@ -60,6 +63,7 @@ class MiqpSession final : public PlannerSession {
   int workspace_step_ = 0;  ///< the step of the last re-plan that used workspace_
   double last_plan_ms_ = 0.0;
   expert::PlanStatus last_status_ = expert::PlanStatus::Converged;
+  expert::GapFrame plan_gap_;
 };
 
 /// The expert's config in closed loop (closed_loop.monotone_lateral).

@@ -231,6 +231,10 @@ MlpMiqpSession::MlpMiqpSession(const MlpMiqpPlanner& planner, MlpMiqpPlanner::Sc
 Decision MlpMiqpSession::act(const Observation& o) {
   if (refused_) return refused(o);
   if (expert_in_charge_) return expert_decision(o, "");
+  return network_decision(o);
+}
+
+Decision MlpMiqpSession::network_decision(const Observation& o) {
   y_peak_ = std::max(y_peak_, o.ego.y);
   const EgoControl u = network_control(o);
   const std::string problem = check_ahead(o, u);
@@ -275,14 +279,33 @@ Decision MlpMiqpSession::refused(const Observation& o) {
     return d;
   }
   refused_ = false;
+  // A network that drives to any gap is handed the gap the expert found;
+  // the paper's network knows one gap only, so the expert drives on.
+  if (!planner_.reads_roles()) {
+    gap_ = expert_.plan_gap();
+    return network_decision(o);
+  }
   expert_in_charge_ = true;
   d.status = ActStatus::TookOver;
   d.reason = "take-over: " + refusal + ", but the expert's check found a plan";
   return d;
 }
 
+// Below the target lane's centre the ego's heading never turns back past
+// parallel to the road, so y never moves back towards the ego lane: the
+// closed-loop expert's rule (closed_loop.monotone_lateral), kept by the
+// network's controls. The network's small lateral wobbles would otherwise
+// read as reversals and hand many lane changes to the expert.
+static EgoControl keep_lateral_monotone(EgoControl u, const Observation& o) {
+  const double dt = o.scene->horizon / o.scene->steps;
+  if (o.ego.y < o.scene->lane_width) u.omega = std::max(u.omega, -o.ego.theta / dt);
+  return u;
+}
+
 EgoControl MlpMiqpSession::network_control(const Observation& o) const {
-  return planner_.network(o, gap_);
+  const EgoControl u = planner_.network(o, gap_);
+  const bool monotone = !planner_.reads_roles() && planner_.config().closed_loop.monotone_lateral;
+  return monotone ? keep_lateral_monotone(u, o) : u;
 }
 
 namespace {

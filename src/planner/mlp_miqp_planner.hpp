@@ -115,6 +115,8 @@ class MlpMiqpSession final : public PlannerSession {
     EgoControl next;                      ///< the network's control at node n
   };
 
+  /// The network's control where the look-ahead passes, else the take-over.
+  [[nodiscard]] Decision network_decision(const Observation& observation);
   [[nodiscard]] EgoControl network_control(const Observation& observation) const;
   [[nodiscard]] std::string check_ahead(const Observation& now, EgoControl first);
   [[nodiscard]] std::string roll_out(const Observation& now, EgoControl first);

@@ -15,10 +15,12 @@ using ScriptedDrive = std::function<EgoControl(const planner::Observation&)>;
 
 /// The classifier answers `label` for every scene and names the paper's gap
 /// (between the follower and the target, where the scene has them).
+/// `reads_roles`: the network reads the paper's three cars, else any gap.
 inline planner::MlpMiqpPlanner scripted_learner(
     const Config& config, Label label, ScriptedDrive drive,
     std::shared_ptr<const expert::LaneChangeSolver> solver =
-        std::make_shared<expert::FastLaneChangeSolver>()) {
+        std::make_shared<expert::FastLaneChangeSolver>(),
+    bool reads_roles = true) {
   const auto classify = [label](const Scenario& s) {
     planner::MlpMiqpPlanner::SceneChoice choice{label != Label::Failure, {}};
     if (s.has_every_role()) choice.gap = {s.index_of(Role::Follower), s.index_of(Role::Target)};
@@ -26,7 +28,7 @@ inline planner::MlpMiqpPlanner scripted_learner(
   };
   auto network = [drive = std::move(drive)](const planner::Observation& o,
                                             const expert::GapFrame& /*gap*/) { return drive(o); };
-  return {config, classify, std::move(network), std::move(solver)};
+  return {config, classify, std::move(network), std::move(solver), "mlp-miqp", reads_roles};
 }
 
 }  // namespace lanechange::testing

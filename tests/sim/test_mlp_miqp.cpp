@@ -23,6 +23,52 @@ MlpMiqpPlanner forced(Drive drive, int scene_class = kWorthTrying,
   return testing::scripted_learner(config, static_cast<Label>(scene_class), std::move(drive));
 }
 
+// A network that drives to any gap is handed the gap the expert's check of
+// a refusal found, and drives it without a take-over.
+TEST(MlpMiqp, AGapNetworkDrivesTheGapTheExpertsCheckFound) {
+  const Config config = testing::untimed_config();
+  const Scenario s = testing::open_road_scenario();
+  const planner::LaneKeeper keeper(config);
+  std::optional<expert::GapFrame> given;
+  const MlpMiqpPlanner p(
+      config,
+      [](const Scenario&) {
+        return MlpMiqpPlanner::SceneChoice{false, {}};
+      },
+      [&](const Observation& o, const expert::GapFrame& gap) {
+        given = gap;
+        return keeper.control(o.ego, o.scene->lane_width, std::nullopt);
+      },
+      std::make_shared<expert::FastLaneChangeSolver>(), "mlp-miqp", false);
+  const sim::Rollout r = sim::simulate(s, p, config);
+  EXPECT_EQ(r.outcome, Outcome::WellPosed) << r.reason;
+  EXPECT_EQ(r.metrics.takeovers, 0);
+  ASSERT_TRUE(given.has_value());
+  // The open gap beside the ego, between the follower and the target.
+  EXPECT_EQ(*given, (expert::GapFrame{s.index_of(Role::Follower), s.index_of(Role::Target)}));
+  EXPECT_EQ(r.steps.front().status, planner::ActStatus::Planned) << r.steps.front().reason;
+}
+
+// Below the target lane's centre a gap network's heading never turns back
+// past parallel: a network that swerves back towards the ego lane is held
+// at a constant y instead of reading as a reversal.
+TEST(MlpMiqp, AGapNetworksLateralMoveNeverTurnsBack) {
+  const Config config = testing::untimed_config();
+  ASSERT_TRUE(config.closed_loop.monotone_lateral);
+  const auto wobble = [](const Observation& o) { return EgoControl{0.0, o.step < 8 ? 0.1 : -0.3}; };
+  const MlpMiqpPlanner p = testing::scripted_learner(
+      config, Label::WellPosed, wobble, std::make_shared<expert::FastLaneChangeSolver>(), false);
+  const sim::Rollout r = sim::simulate(testing::open_road_scenario(), p, config);
+  const auto& y = r.trajectory.ego;
+  int network_steps = 0;
+  for (std::size_t k = 0; k + 1 < r.steps.size() && k + 1 < y.size(); ++k) {
+    if (r.steps[k].status != planner::ActStatus::Planned) break;
+    ++network_steps;
+    EXPECT_GE(y[k + 1].y, y[k].y - 1e-9) << "step " << k;
+  }
+  EXPECT_GT(network_steps, 8);
+}
+
 // A network that drives to a chosen gap reads the gap's two cars and the
 // leader relative to the ego, wherever they are in the scene's list.
 TEST(MlpMiqp, PolicyInputsReadTheChosenGapRelativeToTheEgo) {
