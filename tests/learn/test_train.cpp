@@ -322,6 +322,43 @@ TEST_F(Trained, AWiderNetworkIsTrainedLoadedAndKeptByARetrain) {
   EXPECT_EQ(snapshot(out), before);
 }
 
+// A network that drives to a chosen gap: trained on the data sets' gap
+// inputs, kept by a retrain, loaded by mlp-miqp for a scene of any number of
+// cars; data without those columns is refused by name, the model left alone.
+TEST_F(Trained, AGapNetworkReadsTheGapAndDataWithoutItIsRefused) {
+  const std::string out = (root_ / "gap_model").string();
+  const auto run = testing::run_cli(train_args(out) + " --network-inputs gap");
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  const json model = json::parse(testing::read_text(out + "/model.json"));
+  const auto inputs = model["features"]["action_inputs"].get<std::vector<std::string>>();
+  const json manifest = json::parse(testing::read_text(data_dir() + "/manifest.json"));
+  EXPECT_EQ(inputs, manifest["columns"]["gap_action_inputs"].get<std::vector<std::string>>());
+  EXPECT_EQ(model["config"]["network"]["inputs"], "gap");
+  EXPECT_EQ(Model::load(out).policy().inputs(), static_cast<int>(inputs.size()));
+
+  RetrainOptions o = quick_retrain(out, (root_ / "gap_retrained").string());
+  (void)retrain_network(o);
+  const json retrained = json::parse(testing::read_text(o.out_dir + "/model.json"));
+  EXPECT_EQ(retrained["features"]["action_inputs"], model["features"]["action_inputs"]);
+
+  const Scenario twelve = testing::dense_scenario(10);
+  const auto planner = planner::make_planner("mlp-miqp", Config{}, out);
+  EXPECT_NE(planner->start(twelve), nullptr);
+
+  const fs::path old_data = root_ / "data_without_gap_inputs";
+  fs::remove_all(old_data);
+  fs::copy(data_dir(), old_data, fs::copy_options::recursive);
+  json old_manifest = manifest;
+  old_manifest["columns"].erase("gap_action_inputs");
+  testing::write_text((old_data / "manifest.json").string(), old_manifest.dump());
+  const auto before = snapshot(out);
+  const auto refused = testing::run_cli("train --quick --network-inputs gap --data " +
+                                        old_data.string() + " --out " + out);
+  EXPECT_EQ(refused.exit_code, 2) << refused.output;
+  EXPECT_NE(refused.output.find("gap_action_inputs"), std::string::npos) << refused.output;
+  EXPECT_EQ(snapshot(out), before);
+}
+
 // An ensemble: its first network is the one-network model's (the same seed,
 // though trained beside another on two threads), the others differ, the
 // policy acts as their mean, and DAgger's retrain keeps the ensemble's size.
