@@ -352,6 +352,23 @@ std::string too_close_in_target_lane(const Observation& o, const Scenario& scene
   return "";
 }
 
+// The expert's own bound on the braking its cut-in forces on a car that
+// reacts to the ego (expert.cut_in_decel; none in the paper's formulation),
+// checked on the cars as the look-ahead predicts them.
+std::string forced_braking(const Observation& o, const TrafficModel& traffic,
+                           const Config& config) {
+  if (!config.expert.cut_in_decel) return "";
+  for (CarIndex c = 0; c < o.cars.size(); ++c) {
+    if (traffic.followed_ego(c) && -o.cars[c].a > *config.expert.cut_in_decel) {
+      char what[160];
+      std::snprintf(what, sizeof what, "the network would make the %s brake at %.2f m/s^2",
+                    o.scene->cars[c].id.c_str(), -o.cars[c].a);
+      return what;
+    }
+  }
+  return "";
+}
+
 }  // namespace
 
 // The policy rolled forward against the cars as their behavior predicts
@@ -500,6 +517,10 @@ std::string MlpMiqpSession::check_node(int ahead) {
   }
   if (const std::string close = too_close_in_target_lane(o, scene, gap_); !close.empty()) {
     return close + " " + std::to_string(ahead) + " steps ahead";
+  }
+  if (!planner_.reads_roles()) {
+    const std::string braking = forced_braking(o, *window_.traffic, planner_.config());
+    if (!braking.empty()) return braking + " " + std::to_string(ahead) + " steps ahead";
   }
   // The judge calls a move back towards the ego lane beyond its tolerance
   // ill-posed; the take-over comes at half of it, while it can be stopped.
