@@ -99,6 +99,32 @@ TEST(MlpMiqp, PolicyInputsReadTheChosenGapRelativeToTheEgo) {
 // A "network" that steers hard into the target lane whatever is there.
 EgoControl swerve_left(const Observation&) { return {0.0, 0.26}; }
 
+// A gap network's look-ahead holds it to the expert's bound on the braking
+// its cut-in forces on a car that reacts to it: a fast IDM follower, far
+// enough back for Eq. 1, would brake harder than that behind the swerve.
+TEST(MlpMiqp, AGapNetworkIsTakenOverBeforeItForcesHardBraking) {
+  const Config config = testing::untimed_config();
+  ASSERT_TRUE(config.expert.cut_in_decel.has_value());
+  Scenario s = testing::open_road_scenario(Behavior::Idm);
+  s.follower() = {-40.0, 16.0, 0.0};
+  validate_scenario(s);
+  const auto run = [&](bool reads_roles) {
+    const MlpMiqpPlanner p =
+        testing::scripted_learner(config, Label::WellPosed, swerve_left,
+                                  std::make_shared<expert::FastLaneChangeSolver>(), reads_roles);
+    return sim::simulate(s, p, config);
+  };
+  const sim::Rollout gap = run(false);
+  ASSERT_GE(gap.metrics.takeovers, 1);
+  const auto first = std::find_if(gap.steps.begin(), gap.steps.end(), [](const auto& k) {
+    return k.status == planner::ActStatus::TookOver;
+  });
+  ASSERT_NE(first, gap.steps.end());
+  EXPECT_NE(first->reason.find("brake at"), std::string::npos) << first->reason;
+  // The paper's network is held to Eq. 1 alone.
+  for (const auto& k : run(true).steps) EXPECT_EQ(k.reason.find("brake at"), std::string::npos);
+}
+
 TEST(MlpMiqp, ANetworkSteeringIntoACarIsTakenOverAndNothingIsHit) {
   const Scenario s = testing::no_gap_scenario();
   const Config paper = testing::fixed_gap_config(testing::untimed_config());
