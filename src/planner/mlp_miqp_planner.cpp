@@ -88,12 +88,13 @@ static MlpMiqpPlanner::SceneClassifier scene_classifier(std::shared_ptr<const le
 // rightly none) on the held-out scenes.
 static learn::ClassifierKind best_gap_classifier(const learn::Model& model) {
   learn::ClassifierKind best = learn::ClassifierKind::Svm;
+  const auto scores = model.metrics().find("gap_classifiers");
+  if (scores == model.metrics().end() || !scores->is_object()) return best;
   double best_share = -1.0;
   for (const learn::ClassifierKind kind : learn::kClassifierKinds) {
-    const double share = model.metrics()
-                             .at("gap_classifiers")
-                             .at(std::string(learn::classifier_name(kind)))
-                             .value("completable_share", 0.0);
+    const auto score = scores->find(std::string(learn::classifier_name(kind)));
+    const double share =
+        score != scores->end() && score->is_object() ? score->value("completable_share", 0.0) : 0.0;
     if (share > best_share) {
       best = kind;
       best_share = share;
