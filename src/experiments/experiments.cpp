@@ -37,6 +37,9 @@ constexpr std::uint64_t kDataSeed = 101;
 constexpr std::uint64_t kEvalSeed = 2026;
 // The dense-traffic Table II: cars in the target lane per scene.
 constexpr Interval kDenseTargetLaneCars{4.0, 10.0};
+// The dense model's data: scenes of their own (not the paper's data seeds
+// 101-103, nor the evaluation's).
+constexpr std::uint64_t kDenseDataSeed = 111;
 // SUMO's built-in highway: light and dense traffic, cars per lane and km.
 const std::vector<double> kSumoDensities{15.0, 40.0};
 constexpr int kSumoSeed = 1;
@@ -122,8 +125,9 @@ RunOptions run_options(const Context& c) {
   return run;
 }
 
-void generate_sets(const Context& c, const std::string& parent, std::uint64_t seed,
-                   long long count) {
+// One data set per behavior; `gap_labels` labels every gap around the ego.
+void generate_sets(const Context& c, const std::string& parent, std::uint64_t seed, long long count,
+                   const Config& config, bool gap_labels = false) {
   for (std::size_t i = 0; i < kSampledBehaviors.size(); ++i) {
     data::GenerateOptions g;
     g.count = count;
@@ -131,20 +135,36 @@ void generate_sets(const Context& c, const std::string& parent, std::uint64_t se
     g.behavior = kSampledBehaviors[i];
     g.out_dir = per_behavior_dirs(c, parent)[i];
     g.shard_size = std::max<long long>(1, std::min<long long>(200, count / 4));
-    g.config = c.options.config;
+    g.config = config;
+    g.gap_labels = gap_labels;
     (void)data::generate(g, run_options<data::RunOptions>(c));
   }
 }
 
+// The scenes of the dense Table II, planned by the closed-loop expert's
+// formulation: the network that learns from them drives in closed loop,
+// where the expert never swings back before the line (docs/learning.md).
+Config dense_config(Config config) {
+  config.sampler.target_lane_cars = kDenseTargetLaneCars;
+  return config;
+}
+
+Config dense_data_config(const Config& config) {
+  Config dense = dense_config(config);
+  dense.expert.monotone_lateral = true;
+  return dense;
+}
+
+// `model`: the model directory of mlp-miqp and strategy-qp, in the run.
 void evaluate_sets(const Context& c, const std::string& parent, const Config& config,
-                   const std::vector<std::string>& planners) {
+                   const std::vector<std::string>& planners, const std::string& model = "model") {
   for (std::size_t i = 0; i < kSampledBehaviors.size(); ++i) {
     sim::EvaluateOptions e;
     e.count = c.sizes.eval_per_behavior;
     e.seed = seed_of(kEvalSeed, i);
     e.behavior = kSampledBehaviors[i];
     e.planners = planners;
-    e.model_dir = path_in(c, "model");
+    e.model_dir = path_in(c, model);
     e.out_dir = per_behavior_dirs(c, parent)[i];
     e.shard_size = std::max<long long>(1, std::min<long long>(20, e.count / 4));
     e.config = config;
@@ -268,6 +288,17 @@ learn::TrainOptions train_options(const Context& c) {
 
 void train(const Context& c) { (void)learn::train_models(train_options(c)); }
 
+// The dense model: the same training on the dense data, its network
+// driving to the gap its gap classifier names.
+void train_dense(const Context& c) {
+  learn::TrainOptions t = train_options(c);
+  t.data_dirs = per_behavior_dirs(c, "dense/data");
+  t.out_dir = path_in(c, "dense/model");
+  t.network.inputs = learn::NetworkInputs::Gap;
+  t.plots = false;
+  (void)learn::train_models(t);
+}
+
 // DAgger from the experiments' data, settings and seed, its round 0 the
 // experiments' model with an ensemble in place of the paper's one network
 // (the same classifiers: the same data and seed); its rounds' models,
@@ -355,7 +386,7 @@ ExperimentReport run_experiments(const ExperimentOptions& o) {
   const std::string data = stages.run(
       "data", {{"base", c.base_inputs}, {"count", c.sizes.data_per_behavior}, {"seed", kDataSeed}},
       {"data"}, StageRunner::Ranks::All,
-      [&] { generate_sets(c, "data", kDataSeed, c.sizes.data_per_behavior); });
+      [&] { generate_sets(c, "data", kDataSeed, c.sizes.data_per_behavior, o.config); });
   const std::string models = stages.run("models",
                                         {{"data", data},
                                          {"seed", kTrainSeed},
@@ -368,7 +399,7 @@ ExperimentReport run_experiments(const ExperimentOptions& o) {
       "expert-labels",
       {{"base", c.base_inputs}, {"count", c.sizes.eval_per_behavior}, {"seed", kEvalSeed}},
       {"labels"}, StageRunner::Ranks::All,
-      [&] { generate_sets(c, "labels", kEvalSeed, c.sizes.eval_per_behavior); });
+      [&] { generate_sets(c, "labels", kEvalSeed, c.sizes.eval_per_behavior, o.config); });
   json eval_inputs = {{"base", c.base_inputs},
                       {"models", models},
                       {"count", c.sizes.eval_per_behavior},
@@ -398,13 +429,37 @@ ExperimentReport run_experiments(const ExperimentOptions& o) {
   (void)stages.run("evaluate-paper", eval_inputs, {"eval/paper"}, StageRunner::Ranks::All,
                    [&] { evaluate_sets(c, "eval/paper", paper_formulation(o.config), planners); });
   // And in dense traffic: the same count of scenes, each with a platoon in
-  // the target lane.
-  Config dense = o.config;
-  dense.sampler.target_lane_cars = kDenseTargetLaneCars;
+  // the target lane; the learned planners use a model of their own, learned
+  // from dense scenes, whose network drives to the gap its classifier names.
+  const Config dense_data = dense_data_config(o.config);
+  json dense_data_config_json;
+  to_json(dense_data_config_json, dense_data);
+  const std::string dense_data_stage = stages.run(
+      "dense-data",
+      {{"base", c.base_inputs},
+       {"config", dense_data_config_json},
+       {"count", c.sizes.data_per_behavior},
+       {"seed", kDenseDataSeed},
+       {"gap_labels", true}},
+      {"dense/data"}, StageRunner::Ranks::All, [&] {
+        generate_sets(c, "dense/data", kDenseDataSeed, c.sizes.data_per_behavior, dense_data, true);
+      });
+  const std::string dense_model =
+      stages.run("dense-model",
+                 {{"data", dense_data_stage},
+                  {"seed", kTrainSeed},
+                  {"test_share", kTestShare},
+                  {"quick", c.sizes.quick_search},
+                  {"max_epochs", c.sizes.max_epochs},
+                  {"network_inputs", "gap"}},
+                 {"dense/model"}, StageRunner::Ranks::First, [&] { train_dense(c); });
   eval_inputs.erase("formulation");
   eval_inputs["target_lane_cars"] = {kDenseTargetLaneCars.lo, kDenseTargetLaneCars.hi};
-  (void)stages.run("evaluate-dense", eval_inputs, {"eval/dense"}, StageRunner::Ranks::All,
-                   [&] { evaluate_sets(c, "eval/dense", dense, planners); });
+  eval_inputs["dense_model"] = dense_model;
+  (void)stages.run("evaluate-dense", eval_inputs, {"eval/dense"}, StageRunner::Ranks::All, [&] {
+    evaluate_sets(c, "eval/dense", dense_config(o.config), planners, "dense/model");
+  });
+  eval_inputs.erase("dense_model");
   // And in SUMO's traffic, which reacts and changes lanes (docs/sumo.md).
   eval_inputs.erase("target_lane_cars");
   eval_inputs["count"] = c.sizes.sumo_episodes;
@@ -467,6 +522,7 @@ ExperimentReport run_experiments(const ExperimentOptions& o) {
   }
   report.paper = read_all_rollouts(c, "eval/paper");
   report.dense = read_all_rollouts(c, "eval/dense");
+  report.dense_metrics = json::parse(std::ifstream(c.dir / "dense" / "model" / "metrics.json"));
   report.dense_target_lane_cars = kDenseTargetLaneCars;
   report.sumo = read_sumo_rollouts(c);
   report.sumo_densities = kSumoDensities;
@@ -478,7 +534,10 @@ ExperimentReport run_experiments(const ExperimentOptions& o) {
     report.dagger_options = d;
   }
   report.examples = examples;
-  report.seeds = {{"data", kDataSeed}, {"evaluation", kEvalSeed}, {"train", kTrainSeed}};
+  report.seeds = {{"data", kDataSeed},
+                  {"dense data", kDenseDataSeed},
+                  {"evaluation", kEvalSeed},
+                  {"train", kTrainSeed}};
   report.stages = stages.records();
   out.stages = stages.records();
   out.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

@@ -74,6 +74,10 @@ void provenance(Document& d, const ReportInputs& in) {
   };
   std::string seeds = "seeds: expert data ";
   seeds += std::to_string(in.seeds.at("data"));
+  if (in.seeds.contains("dense data")) {
+    seeds += ", dense expert data ";
+    seeds += std::to_string(in.seeds.at("dense data"));
+  }
   seeds += ", evaluation ";
   seeds += std::to_string(in.seeds.at("evaluation"));
   seeds +=
@@ -146,6 +150,22 @@ void paper_section(Document& d, const ReportInputs& in) {
   variant_tables(d, "the paper's formulation", in.paper, in);
 }
 
+// Who drove mlp-miqp's successes: the network alone, or the expert after a
+// take-over.
+void network_share(Document& d, const std::vector<sim::RolloutRow>& rows) {
+  long long successes = 0;
+  long long alone = 0;
+  for (const auto& r : rows) {
+    if (r.planner != "mlp-miqp" || !r.success()) continue;
+    ++successes;
+    alone += r.takeovers == 0 ? 1 : 0;
+  }
+  if (successes == 0) return;
+  d.paragraph("mlp-miqp's network drove " + std::to_string(alone) + " of its " +
+              std::to_string(successes) + " successes alone (" + percent(alone, successes) +
+              "); the expert took over in the others.");
+}
+
 void dense_section(Document& d, const ReportInputs& in) {
   d.heading(2, "Dense traffic");
   d.paragraph(
@@ -154,10 +174,19 @@ void dense_section(Document& d, const ReportInputs& in) {
       std::to_string(std::lround(in.dense_target_lane_cars.hi)) +
       " cars in the target lane, a leader and a car behind the ego in its lane "
       "(`sampler.target_lane_cars`, docs/scenarios.md, \"Dense traffic\"), the default "
-      "formulation and traffic. The expert chooses among all gaps; mlp-miqp and strategy-qp "
-      "read the three cars nearest the ego (docs/scenarios.md, \"Roles\"). " +
+      "formulation and traffic. The expert chooses among all gaps. mlp-miqp and strategy-qp "
+      "use a model of their own (stages `dense-data`, `dense-model`: as many dense scenes "
+      "per behavior as the paper's data, planned by the closed-loop expert's formulation, "
+      "every gap labelled): mlp-miqp's gap classifier names the gap and its network drives "
+      "to it (docs/learning.md, docs/closed_loop.md). " +
       traffic_check(in.dense, in.car_decel_limit) + ".");
   variant_tables(d, "dense traffic", in.dense, in);
+  network_share(d, in.dense);
+  if (in.dense_metrics.contains("data")) {
+    d.paragraph("The dense model's classifiers, held out as in Table I (" +
+                in.dense_metrics.at("data").at("test_scenarios").dump() + " test scenes):");
+    d.table(classifier_table(in.dense_metrics));
+  }
 }
 
 void sumo_section(Document& d, const ReportInputs& in) {

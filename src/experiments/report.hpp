@@ -31,6 +31,7 @@ struct ReportInputs {
   std::vector<sim::RolloutRow> paper;        ///< the paper's formulation and traffic
   std::vector<sim::RolloutRow> dense;        ///< dense traffic, the default formulation
   Interval dense_target_lane_cars;
+  nlohmann::json dense_metrics;       ///< the dense model's metrics.json
   std::vector<sim::RolloutRow> sumo;  ///< SUMO traffic: the highway and CommonRoad folders
   std::vector<double> sumo_densities;
   std::optional<double> car_decel_limit;  ///< traffic.max_decel of the run
