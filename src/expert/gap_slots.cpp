@@ -72,13 +72,12 @@ std::string_view gap_slot_name(int slot) {
 const std::vector<std::string>& gap_feature_names() {
   static const std::vector<std::string> names = [] {
     std::vector<std::string> n = {"ego_v0", "ego_a0"};
-    const auto add_car = [&n](const std::string& car) { add_car_names(n, car); };
-    add_car("lane_ahead");
-    add_car("lane_behind");
+    add_car_names(n, "lane_ahead");
+    add_car_names(n, "lane_behind");
     for (int slot = 0; slot < kGapSlots; ++slot) {
       const std::string prefix = "gap_" + std::string(gap_slot_name(slot));
-      add_car(prefix + "_behind");
-      add_car(prefix + "_ahead");
+      add_car_names(n, prefix + "_behind");
+      add_car_names(n, prefix + "_ahead");
     }
     return n;
   }();
