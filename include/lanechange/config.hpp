@@ -410,6 +410,9 @@ struct TrafficSettings {
   bool followers_react = true;
   double reaction_time = 1.0;  ///< s: Krauss's tau, SUMO's default
   double follow_decel = 4.5;   ///< m/s^2: Krauss's b, the braking a follower plans with (SUMO's)
+  /// m, bumper to bumper: the gap a following car keeps on top of Krauss's
+  /// safe-speed gap (SUMO's minGap; the SUMO loop takes its cars' own).
+  double min_gap = 0.0;
   /// m/s^2: no car brakes harder, whatever its model asks (dry asphalt allows
   /// about 8 to 9); where that is not enough, the collision happens and is
   /// judged. None (JSON null): no limit, the paper's IDM.

@@ -110,6 +110,7 @@ class TrafficModel {
     bool is_ego;
   };
   [[nodiscard]] Ahead ahead_of(CarIndex which, const EgoFootprint& ego) const;
+  void sort_by_lane_and_position();
   /// The acceleration of car `which` this step, from the state now.
   [[nodiscard]] double acceleration_of(CarIndex which, const EgoFootprint& ego, double dt);
   void advance_ballistic(CarState& car, double dt) const;
@@ -133,6 +134,9 @@ class TrafficModel {
   /// not its behavior alone; 0 else
   std::vector<char> follows_;
   std::vector<char> followed_ego_;  ///< as follows_, for the ego ahead
+  std::vector<CarIndex> order_;     ///< the cars by lane, then by x (this step's)
+  std::vector<std::size_t> rank_;   ///< per car, its place in order_
+  double longest_ = 0.0;            ///< the longest car's length
   double time_ = 0.0;
 };
 

@@ -115,6 +115,7 @@ void Config::validate() const {
           "must be positive, or null for no cap");
   require(traffic.reaction_time > 0, "traffic.reaction_time", "must be positive");
   require(traffic.follow_decel > 0, "traffic.follow_decel", "must be positive");
+  require(traffic.min_gap >= 0, "traffic.min_gap", "must not be negative");
   require(!expert.cut_in_decel || *expert.cut_in_decel > 0, "expert.cut_in_decel",
           "must be positive or null");
   require(expert.restore_distance_within >= 0, "expert.restore_distance_within",

@@ -76,6 +76,7 @@ void visit_fields(V& v, S& s) requires std::same_as<std::remove_const_t<S>, Traf
   v("followers_react", s.followers_react);
   v("reaction_time", s.reaction_time);
   v("follow_decel", s.follow_decel);
+  v("min_gap", s.min_gap);
   v("max_decel", s.max_decel);
   v("replay_prediction", s.replay_prediction);
 }

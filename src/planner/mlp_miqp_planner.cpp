@@ -456,6 +456,8 @@ std::string MlpMiqpSession::extend_window() {
   Window& w = window_;
   const double dt = w.cars.dt;
   w.ego.erase(w.ego.begin());
+  // Node 1's observation keeps its buffer for the new node (no allocation).
+  recycled_ = std::move(w.ahead.front());
   w.ahead.erase(w.ahead.begin());
   for (CarTrack& track : w.cars.cars) {
     track.x.erase(track.x.begin());
@@ -509,7 +511,8 @@ void MlpMiqpSession::advance_window(double dt) {
     track.v.push_back(car.v);
     track.a.push_back(car.a);
   }
-  w.ahead.push_back(o);
+  recycled_ = o;
+  w.ahead.push_back(std::move(recycled_));
   w.next = network_control(o);
 }
 

@@ -138,6 +138,7 @@ class MlpMiqpSession final : public PlannerSession {
   /// look-ahead sees a move back towards the ego lane that has begun.
   double y_peak_ = -INFINITY;
   Window window_;
+  Observation recycled_;         ///< a look-ahead node's buffer between its two uses
   TrafficPrediction segment_;    ///< the window's last step, for the collision test
   std::vector<double> lateral_;  ///< the window's y, for the reversal test
   bool expert_in_charge_ = false;

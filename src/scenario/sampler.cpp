@@ -90,7 +90,7 @@ Scenario ScenarioSampler::dense(Rng& rng, Behavior behavior) const {
   // a scene does not start with the ego forcing it to brake.
   const double rear_v = s.ego.v * rng.uniform(p.ego_speed_ratio);
   const TrafficSettings& t = config_.traffic;
-  const double calm_gap = s.ego.v * t.reaction_time +
+  const double calm_gap = t.min_gap + s.ego.v * t.reaction_time +
                           std::max(0.0, rear_v - s.ego.v) *
                               ((s.ego.v + rear_v) / (2.0 * t.follow_decel) + t.reaction_time);
   const double rear_gap = std::max({rng.uniform(p.rear_headway) * rear_v, calm_gap, 1.0});

@@ -6,8 +6,22 @@
 
 namespace lanechange {
 
+namespace {
+
+// IDM's (v / v0)^delta. Traffic steps call it for every car, and delta is 4
+// in nearly every use: two squarings cost a fraction of std::pow.
+double speed_ratio_power(double ratio, double exponent) {
+  if (exponent == 4.0) {
+    const double squared = ratio * ratio;
+    return squared * squared;
+  }
+  return std::pow(ratio, exponent);
+}
+
+}  // namespace
+
 double idm_acceleration(const IdmParameters& p, double v, double gap, double leader_speed) {
-  const double free_road = 1.0 - std::pow(v / p.desired_speed, p.exponent);
+  const double free_road = 1.0 - speed_ratio_power(v / p.desired_speed, p.exponent);
   if (!std::isfinite(gap)) return p.max_accel * free_road;
   // A car that touches its leader brakes as hard as the model can; a tiny
   // floor keeps the ratio finite.
@@ -59,7 +73,8 @@ SafeGapLine idm_gap_braking_at_most(double decel, double speed, double leader_sp
   const double interaction = speed / (2.0 * std::sqrt(p.max_accel * p.comfortable_decel));
   const double desired_gap =
       p.min_gap + speed * p.time_headway + interaction * (speed - leader_speed);
-  const double room = 1.0 - std::pow(speed / p.desired_speed, p.exponent) + decel / p.max_accel;
+  const double room =
+      1.0 - speed_ratio_power(speed / p.desired_speed, p.exponent) + decel / p.max_accel;
   const double scale = room > 0.0 ? 1.0 / std::sqrt(room) : 1.0;
   return {desired_gap * scale, -interaction * scale};
 }
@@ -71,7 +86,7 @@ SafeGapLine krauss_gap_braking_at_most(double decel, double speed, double leader
   const double lowest_speed = speed - decel * dt;
   const double b = t.follow_decel;
   const double gap =
-      leader_speed * t.reaction_time +
+      t.min_gap + leader_speed * t.reaction_time +
       (lowest_speed - leader_speed) * ((leader_speed + speed) / (2.0 * b) + t.reaction_time);
   return {gap, -(2.0 * leader_speed + decel * dt) / (2.0 * b)};
 }
@@ -119,7 +134,9 @@ TrafficModel::TrafficModel(const Scenario& scenario, const Config& config, Recor
       max_decel_(config.traffic.max_decel.value_or(std::numeric_limits<double>::infinity())),
       accel_(scenario.car_count(), 0.0),
       follows_(scenario.car_count(), 0),
-      followed_ego_(scenario.car_count(), 0) {
+      followed_ego_(scenario.car_count(), 0),
+      order_(scenario.car_count()),
+      rank_(scenario.car_count()) {
   const std::size_t n = scenario.car_count();
   behavior_.reserve(n);
   lane_center_.reserve(n);
@@ -140,24 +157,51 @@ TrafficModel::TrafficModel(const Scenario& scenario, const Config& config, Recor
     cars_.push_back(scenario.car(i));
     if (behavior_.back() == Behavior::ConstantSpeed) cars_.back().a = 0.0;
     behavior_accel_.push_back(cars_.back().a);
+    longest_ = std::max(longest_, length_.back());
+    order_[i] = i;
   }
 }
 
+// Cars keep their order in a lane from one step to the next, so an
+// insertion sort finds the new order in one pass.
+void TrafficModel::sort_by_lane_and_position() {
+  const auto before = [&](CarIndex a, CarIndex b) {
+    if (lane_center_[a] != lane_center_[b]) return lane_center_[a] < lane_center_[b];
+    return cars_[a].x < cars_[b].x;
+  };
+  for (std::size_t i = 1; i < order_.size(); ++i) {
+    const CarIndex car = order_[i];
+    std::size_t j = i;
+    for (; j > 0 && before(car, order_[j - 1]); --j) order_[j] = order_[j - 1];
+    order_[j] = car;
+  }
+  for (std::size_t i = 0; i < order_.size(); ++i) rank_[order_[i]] = i;
+}
+
+// The cars after `which` in order_ are those at or ahead of it in its lane.
+// The nearest by bumper gap wins (the lowest index among equals, as a scan
+// in the scene's order finds it); a car whose gap, with the longest body of
+// the scene, cannot beat the best ends the search, and so do all after it.
 TrafficModel::Ahead TrafficModel::ahead_of(CarIndex which, const EgoFootprint& ego) const {
   const CarState& me = cars_[which];
   const double my_lane = lane_center_[which];
   Ahead out{std::numeric_limits<double>::infinity(), me.v, false};
-  auto consider = [&](double x, double v, double length, bool is_ego) {
-    const double g = x - me.x - 0.5 * (length_[which] + length);
-    if (x > me.x && g < out.gap) out = {g, v, is_ego};
-  };
-  for (CarIndex other = 0; other < cars_.size(); ++other) {
-    if (other != which && lane_center_[other] == my_lane) {
-      consider(cars_[other].x, cars_[other].v, length_[other], false);
+  CarIndex best = cars_.size();
+  for (std::size_t p = rank_[which] + 1; p < order_.size(); ++p) {
+    const CarIndex other = order_[p];
+    const CarState& car = cars_[other];
+    if (lane_center_[other] != my_lane) break;
+    if (car.x - me.x - 0.5 * (length_[which] + longest_) > out.gap) break;
+    if (car.x <= me.x) continue;
+    const double g = car.x - me.x - 0.5 * (length_[which] + length_[other]);
+    if (g < out.gap || (g == out.gap && other < best)) {
+      out = {g, car.v, false};
+      best = other;
     }
   }
   if (body_in_lane(ego.y, vehicle_.width, my_lane, lane_width_)) {
-    consider(ego.x, ego.v, vehicle_.length, true);
+    const double g = ego.x - me.x - 0.5 * (length_[which] + vehicle_.length);
+    if (ego.x > me.x && g < out.gap) out = {g, ego.v, true};
   }
   return out;
 }
@@ -179,8 +223,8 @@ double TrafficModel::acceleration_of(CarIndex which, const EgoFootprint& ego, do
   CarState by_behavior = me;
   by_behavior.a = behavior_accel_[which];
   advance_constant_accel(by_behavior, dt, speed_cap_);
-  const double safe = krauss_safe_speed(ahead.gap, me.v, ahead.speed, settings_.reaction_time,
-                                        settings_.follow_decel);
+  const double safe = krauss_safe_speed(ahead.gap - settings_.min_gap, me.v, ahead.speed,
+                                        settings_.reaction_time, settings_.follow_decel);
   if (safe >= by_behavior.v) return behavior_accel_[which];
   follows_[which] = 1;
   followed_ego_[which] = ahead.is_ego ? 1 : 0;
@@ -203,6 +247,7 @@ void TrafficModel::advance_ballistic(CarState& c, double dt) const {
 
 void TrafficModel::step(double dt, const EgoFootprint& ego) {
   // Every car reacts to the others where they are now, before any moves.
+  sort_by_lane_and_position();
   for (CarIndex i = 0; i < cars_.size(); ++i) accel_[i] = acceleration_of(i, ego, dt);
   for (CarIndex i = 0; i < cars_.size(); ++i) {
     cars_[i].a = accel_[i];

@@ -231,6 +231,44 @@ TEST(Followers, NoCarBrakesHarderThanItsPhysicalLimit) {
   EXPECT_LT(paper.car(car_of(Role::Follower)).a, -30.0);
 }
 
+// A lane of IDM cars of several lengths, listed out of their order on the
+// road: each follows the car whose rear bumper is nearest ahead of it.
+TEST(Followers, EachCarFollowsTheNearestCarAheadWhateverTheSceneOrder) {
+  Scenario s = two_lane_scene(Behavior::Idm);
+  s.cars.clear();
+  const double xs[] = {40.0, -25.0, 95.0, 0.0, 61.0, 18.0, -60.0, 130.0};
+  const double lengths[] = {4.5, 12.0, 5.0, 4.0, 16.5, 4.5, 5.0, 4.5};
+  for (int i = 0; i < 8; ++i) {
+    std::string id = "c";
+    id += std::to_string(i);
+    OtherCar car{id,
+                 Lane::Target,
+                 {xs[i], 8.0 + 0.5 * i, 0.0},
+                 Behavior::Idm,
+                 VehicleSize{lengths[i], 1.8},
+                 std::nullopt};
+    s.cars.push_back(car);
+  }
+  s.ego = {-200.0, 0.0, 10.0, 0.0, 0.0};  // in the other lane, behind them all
+  const Config config;
+  TrafficModel traffic(s, config);
+  traffic.step(0.1, {s.ego.x, s.ego.y, s.ego.v});
+  for (int i = 0; i < 8; ++i) {
+    double gap = std::numeric_limits<double>::infinity();
+    double leader_speed = 0.0;
+    for (int j = 0; j < 8; ++j) {
+      const double g = xs[j] - xs[i] - 0.5 * (lengths[i] + lengths[j]);
+      if (xs[j] > xs[i] && g < gap) {
+        gap = g;
+        leader_speed = 8.0 + 0.5 * j;
+      }
+    }
+    const double expected =
+        std::max(idm_acceleration(s.idm, 8.0 + 0.5 * i, gap, leader_speed), -9.0);
+    EXPECT_NEAR(traffic.car(static_cast<CarIndex>(i)).a, expected, 1e-12) << i;
+  }
+}
+
 TEST(Followers, KraussSafeSpeedStopsBehindAStoppedCar) {
   // At the gap a car needs to stop from v at b after tau, its safe speed is v.
   const double v = 10.0, tau = 1.0, b = 4.5;
@@ -244,12 +282,18 @@ TEST(Followers, KraussSafeSpeedStopsBehindAStoppedCar) {
 // At the gap gap_braking_at_most gives, the model brakes the car behind the
 // ego by just the deceleration asked; a metre closer, harder.
 TEST(Followers, TheCutInGapIsWhereTheCarBrakesByTheGivenDeceleration) {
-  const Config config;
+  Config config;
   const double decel = 3.5, dt = 0.1;
-  for (const Behavior behavior : {Behavior::ConstantSpeed, Behavior::Idm}) {
+  for (const auto& [behavior, min_gap] :
+       {std::pair{Behavior::ConstantSpeed, 0.0}, std::pair{Behavior::ConstantSpeed, 2.5},
+        std::pair{Behavior::Idm, 0.0}}) {
+    config.traffic.min_gap = min_gap;
     for (const auto& [car_v, ego_v] :
          {std::pair{12.0, 8.0}, std::pair{9.0, 9.0}, std::pair{10.0, 4.0}}) {
-      SCOPED_TRACE(std::string(to_string(behavior)) + " at " + std::to_string(car_v));
+      std::string trace(to_string(behavior));
+      trace += " at " + std::to_string(car_v);
+      trace += ", min gap " + std::to_string(min_gap);
+      SCOPED_TRACE(trace);
       Scenario s = two_lane_scene(behavior);
       s.target() = {200.0, car_v, 0.0};
       const auto line =
