@@ -161,7 +161,11 @@ inline CommandResult run_cli_command(const std::string& command_line) {
 
 /// Runs the lanechange CLI with `args` (already shell-quoted).
 inline CommandResult run_cli(const std::string& args) {
-  return run_cli_command(std::string(LANECHANGE_CLI) + " " + args);
+  // Appended, not concatenated: GCC 12 warns falsely on `string + " " + string` here.
+  std::string command = LANECHANGE_CLI;
+  command += ' ';
+  command += args;
+  return run_cli_command(command);
 }
 
 /// Runs the lanechange CLI on `ranks` MPI ranks (mpirun must be on PATH).
