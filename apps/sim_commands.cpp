@@ -10,6 +10,7 @@
 #include "lanechange/scenario.hpp"
 #include "lanechange/sim/evaluate.hpp"
 #include "lanechange/sim/simulator.hpp"
+#include "lanechange/sumo/cosim.hpp"
 #include "lanechange/sumo/evaluate.hpp"
 #include "lanechange/trajectory.hpp"
 #include "team.hpp"
@@ -30,6 +31,7 @@ struct EvaluateArgs {
   sim::EvaluateOptions options;
   std::string sumo_highway;     ///< densities, comma-separated: SUMO episodes instead of scenes
   std::string sumo_commonroad;  ///< a directory of interactive scenario folders
+  std::string prediction = "constant_speed";  ///< SUMO episodes: how planners predict SUMO's cars
   bool shard_size_given = false;
   std::string behavior;
   std::string target_lane_cars;
@@ -118,7 +120,8 @@ void evaluate_sumo(const EvaluateArgs& a, const Config& config) {
   s.out_dir = o.out_dir;
   if (a.shard_size_given) s.shard_size = o.shard_size;
   s.loop.duration = o.duration;
-  s.config = config;
+  s.loop.prediction = behavior_from_string(a.prediction, "--prediction");
+  s.config = sumo::as_sumo_drives(config);
   s.make_planner = baselines::make_planner;
   run_evaluation(a.jobs, s.out_dir,
                  [&s](const sim::EvaluateRun& run) { return sumo::evaluate(s, run); });
@@ -171,8 +174,18 @@ void add_evaluate(CLI::App& app, const ConfigSource& config) {
       "--sumo-commonroad", a->sumo_commonroad,
       "SUMO episodes of every CommonRoad interactive scenario folder of this directory");
   sumo_commonroad->excludes(scenes)->excludes(sumo_highway)->excludes(count)->excludes(seed);
-  cmd->callback([a, config, count, seed, scenes, sumo_highway, sumo_commonroad, shard_size] {
+  auto* prediction = cmd->add_option("--prediction", a->prediction,
+                                     "SUMO episodes: how planners predict SUMO's cars (idm, "
+                                     "constant_speed or constant_accel; docs/sumo.md)")
+                         ->capture_default_str();
+  cmd->callback([a, config, count, seed, scenes, sumo_highway, sumo_commonroad, shard_size,
+                 prediction] {
     a->shard_size_given = shard_size->count() > 0;
+    if (prediction->count() > 0 && sumo_highway->count() == 0 && sumo_commonroad->count() == 0) {
+      throw InputError("--prediction",
+                       "applies to SUMO episodes only (--sumo-highway or "
+                       "--sumo-commonroad)");
+    }
     if (sumo_commonroad->count() > 0) {
       evaluate_sumo(*a, config());
       return;

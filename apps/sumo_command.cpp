@@ -20,11 +20,12 @@ struct SumoArgs {
   std::string commonroad;  ///< an interactive scenario folder
   sumo::HighwaySettings road;
   sumo::CoSimSettings loop;
-  std::string prediction = "idm";
+  std::string prediction = "constant_speed";
   std::string out_path;
 };
 
-void run_episode(SumoArgs& a, const Config& config) {
+void run_episode(SumoArgs& a, const Config& given) {
+  const Config config = sumo::as_sumo_drives(given);
   if (a.highway == !a.commonroad.empty()) {
     throw InputError("--highway", "name the traffic: --highway or --commonroad DIR");
   }

@@ -83,6 +83,12 @@ enum class TrafficIntegration {
   Euler,      ///< v += a dt, then x += v dt (semi-implicit; the authors' prediction)
 };
 
+/// When a car takes the ego for the car ahead of it in its lane.
+enum class SeesEgo {
+  InLane,       ///< once the ego's body is in its lane: a driver who watches the line
+  Overlapping,  ///< once the ego's body overlaps its own width: SUMO's sublane model
+};
+
 /// What the expert does where its plain rounds fail (docs/expert.md, "Rounds that never
 /// converge").
 enum class Globalisation {
@@ -413,6 +419,8 @@ struct TrafficSettings {
   /// m, bumper to bumper: the gap a following car keeps on top of Krauss's
   /// safe-speed gap (SUMO's minGap; the SUMO loop takes its cars' own).
   double min_gap = 0.0;
+  /// When a car starts to follow an ego that changes into its lane.
+  SeesEgo sees_ego = SeesEgo::InLane;
   /// m/s^2: no car brakes harder, whatever its model asks (dry asphalt allows
   /// about 8 to 9); where that is not enough, the collision happens and is
   /// judged. None (JSON null): no limit, the paper's IDM.

@@ -126,6 +126,7 @@ class TrafficModel {
   std::vector<Behavior> behavior_;
   std::vector<double> lane_center_;
   std::vector<double> length_;
+  std::vector<double> width_;
   std::vector<double> behavior_accel_;                 ///< a constant-acceleration car's own a
   std::vector<std::optional<RecordedTrack>> records_;  ///< a replayed car's, under Records::Replay
   std::vector<CarState> cars_;

@@ -71,12 +71,17 @@ inline constexpr std::array<detail::EnumName<Behavior>, 4> enum_names(Behavior) 
            {Behavior::Replay, "replay"}}};
 }
 
+inline constexpr std::array<detail::EnumName<SeesEgo>, 2> enum_names(SeesEgo) {
+  return {{{SeesEgo::InLane, "in_lane"}, {SeesEgo::Overlapping, "overlapping"}}};
+}
+
 template <class V, class S>
 void visit_fields(V& v, S& s) requires std::same_as<std::remove_const_t<S>, TrafficSettings> {
   v("followers_react", s.followers_react);
   v("reaction_time", s.reaction_time);
   v("follow_decel", s.follow_decel);
   v("min_gap", s.min_gap);
+  v("sees_ego", s.sees_ego);
   v("max_decel", s.max_decel);
   v("replay_prediction", s.replay_prediction);
 }

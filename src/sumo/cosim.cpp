@@ -257,6 +257,12 @@ std::vector<std::string> sumo_arguments(double dt, int seed, const std::string& 
 
 }  // namespace
 
+Config as_sumo_drives(Config config) {
+  config.traffic.sees_ego = SeesEgo::Overlapping;
+  config.traffic.min_gap = 2.5;  // m: SUMO's passenger car, and the built-in highway's
+  return config;
+}
+
 void validate(const HighwaySettings& h) {
   if (h.lanes < 2 || h.lanes > 8) throw InputError("lanes", "must be 2 to 8");
   if (h.ego_lane < 0 || h.ego_lane + 1 >= h.lanes) {

@@ -141,6 +141,7 @@ TrafficModel::TrafficModel(const Scenario& scenario, const Config& config, Recor
   behavior_.reserve(n);
   lane_center_.reserve(n);
   length_.reserve(n);
+  width_.reserve(n);
   behavior_accel_.reserve(n);
   cars_.reserve(n);
   records_.resize(n);
@@ -154,6 +155,7 @@ TrafficModel::TrafficModel(const Scenario& scenario, const Config& config, Recor
     }
     lane_center_.push_back(scenario.lane_center(i));
     length_.push_back(scenario.size_of(i).length);
+    width_.push_back(scenario.size_of(i).width);
     cars_.push_back(scenario.car(i));
     if (behavior_.back() == Behavior::ConstantSpeed) cars_.back().a = 0.0;
     behavior_accel_.push_back(cars_.back().a);
@@ -199,7 +201,10 @@ TrafficModel::Ahead TrafficModel::ahead_of(CarIndex which, const EgoFootprint& e
       best = other;
     }
   }
-  if (body_in_lane(ego.y, vehicle_.width, my_lane, lane_width_)) {
+  const bool sees_ego = settings_.sees_ego == SeesEgo::InLane
+                            ? body_in_lane(ego.y, vehicle_.width, my_lane, lane_width_)
+                            : std::abs(ego.y - my_lane) < 0.5 * (vehicle_.width + width_[which]);
+  if (sees_ego) {
     const double g = ego.x - me.x - 0.5 * (length_[which] + vehicle_.length);
     if (ego.x > me.x && g < out.gap) out = {g, ego.v, true};
   }

@@ -269,6 +269,29 @@ TEST(Followers, EachCarFollowsTheNearestCarAheadWhateverTheSceneOrder) {
   }
 }
 
+// An ego whose body has just crossed the line: a car that watches the line
+// follows it; one that reacts to bodies in its path (SUMO's sublane model)
+// only once the ego overlaps its own width.
+TEST(Followers, WhenACarSeesTheEgoDependsOnTheSetting) {
+  Scenario s = two_lane_scene(Behavior::ConstantSpeed);
+  s.follower() = {0.0, 14.0, 0.0};
+  s.target() = {200.0, 14.0, 0.0};
+  const double car_width = s.size_of(car_of(Role::Follower)).width;
+  const double crossed = 0.5 * s.lane_width - 0.5 * s.vehicle.width + 0.2;  // 0.2 m over the line
+  const double overlapping = s.lane_width - 0.5 * (s.vehicle.width + car_width) + 0.2;
+  auto follows_ego_at = [&](double y, SeesEgo sees) {
+    Config config;
+    config.traffic.sees_ego = sees;
+    TrafficModel traffic(s, config);
+    traffic.step(0.1, {14.0, y, 8.0});  // 14 m ahead of its centre, slower: it must brake
+    return traffic.followed_ego(car_of(Role::Follower));
+  };
+  EXPECT_TRUE(follows_ego_at(crossed, SeesEgo::InLane));
+  EXPECT_FALSE(follows_ego_at(crossed, SeesEgo::Overlapping));
+  EXPECT_TRUE(follows_ego_at(overlapping, SeesEgo::Overlapping));
+  EXPECT_FALSE(follows_ego_at(crossed - 0.4, SeesEgo::InLane));
+}
+
 TEST(Followers, KraussSafeSpeedStopsBehindAStoppedCar) {
   // At the gap a car needs to stop from v at b after tau, its safe speed is v.
   const double v = 10.0, tau = 1.0, b = 4.5;
@@ -288,8 +311,10 @@ TEST(Followers, TheCutInGapIsWhereTheCarBrakesByTheGivenDeceleration) {
        {std::pair{Behavior::ConstantSpeed, 0.0}, std::pair{Behavior::ConstantSpeed, 2.5},
         std::pair{Behavior::Idm, 0.0}}) {
     config.traffic.min_gap = min_gap;
-    for (const auto& [car_v, ego_v] :
-         {std::pair{12.0, 8.0}, std::pair{9.0, 9.0}, std::pair{10.0, 4.0}}) {
+    for (const auto& speeds : {std::pair{12.0, 8.0}, std::pair{9.0, 9.0}, std::pair{10.0, 4.0}}) {
+      // Plain variables, not a structured binding: the lambda below captures them.
+      const double car_v = speeds.first;
+      const double ego_v = speeds.second;
       std::string trace(to_string(behavior));
       trace += " at " + std::to_string(car_v);
       trace += ", min gap " + std::to_string(min_gap);

@@ -26,7 +26,7 @@ HighwaySettings busy_highway() {
 }
 
 CoSimResult run_miqp(const HighwaySettings& highway, const testing::TempDir& dir) {
-  const Config config = testing::untimed_config();
+  const Config config = as_sumo_drives(testing::untimed_config());
   const auto planner = baselines::make_planner("miqp", config);
   CoSimSettings settings;
   settings.work_dir = dir.path().string() + "/sumo";

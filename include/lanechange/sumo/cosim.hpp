@@ -39,8 +39,10 @@ struct CoSimSettings {
   /// asked: the cars around it react to it first.
   double request_after = 2.0;
   double duration = 0.0;  ///< s of rollout from the request; 0: horizon + closed_loop.settle_time
-  Behavior prediction = Behavior::Idm;  ///< the model planners predict SUMO's cars by
-  std::string work_dir;                 ///< SUMO's input files and its own outputs go here
+  /// The model planners predict SUMO's cars by: their speed kept, and Krauss
+  /// following (traffic.followers_react), the model SUMO drives them by.
+  Behavior prediction = Behavior::ConstantSpeed;
+  std::string work_dir;  ///< SUMO's input files and its own outputs go here
 };
 
 struct CoSimResult {
@@ -55,6 +57,12 @@ struct CoSimResult {
   /// SUMO's cars that followed the ego (SUMO named it their leader) at some step.
   std::set<std::string> followers;
 };
+
+/// The config a SUMO run's planners plan with: SUMO's cars as SUMO drives
+/// them. A car follows the ego once their bodies overlap (the sublane model,
+/// traffic.sees_ego = overlapping) and keeps SUMO's minimum gap of 2.5 m
+/// (traffic.min_gap); the rest of `config` as given.
+[[nodiscard]] Config as_sumo_drives(Config config);
 
 /// One episode on the built-in highway. InputError for settings out of range
 /// (naming the setting); std::runtime_error where SUMO fails.
