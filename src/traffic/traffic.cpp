@@ -201,10 +201,9 @@ TrafficModel::Ahead TrafficModel::ahead_of(CarIndex which, const EgoFootprint& e
       best = other;
     }
   }
-  const bool sees_ego = settings_.sees_ego == SeesEgo::InLane
-                            ? body_in_lane(ego.y, vehicle_.width, my_lane, lane_width_)
-                            : std::abs(ego.y - my_lane) < 0.5 * (vehicle_.width + width_[which]);
-  if (sees_ego) {
+  // Overlapping: the ego's body reaches into the band of the car's own width.
+  const double band = settings_.sees_ego == SeesEgo::InLane ? lane_width_ : width_[which];
+  if (body_in_lane(ego.y, vehicle_.width, my_lane, band)) {
     const double g = ego.x - me.x - 0.5 * (length_[which] + vehicle_.length);
     if (ego.x > me.x && g < out.gap) out = {g, ego.v, true};
   }
