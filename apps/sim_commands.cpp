@@ -10,7 +10,6 @@
 #include "lanechange/scenario.hpp"
 #include "lanechange/sim/evaluate.hpp"
 #include "lanechange/sim/simulator.hpp"
-#include "lanechange/sumo/cosim.hpp"
 #include "lanechange/sumo/evaluate.hpp"
 #include "lanechange/trajectory.hpp"
 #include "team.hpp"
@@ -121,7 +120,7 @@ void evaluate_sumo(const EvaluateArgs& a, const Config& config) {
   if (a.shard_size_given) s.shard_size = o.shard_size;
   s.loop.duration = o.duration;
   s.loop.prediction = behavior_from_string(a.prediction, "--prediction");
-  s.config = sumo::as_sumo_drives(config);
+  s.config = config;
   s.make_planner = baselines::make_planner;
   run_evaluation(a.jobs, s.out_dir,
                  [&s](const sim::EvaluateRun& run) { return sumo::evaluate(s, run); });

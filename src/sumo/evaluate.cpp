@@ -209,7 +209,10 @@ std::string highway_group(double density) {
   return name.str();
 }
 
-sim::EvaluateReport evaluate(const EvaluateOptions& o, const sim::EvaluateRun& run) {
+sim::EvaluateReport evaluate(const EvaluateOptions& given, const sim::EvaluateRun& run) {
+  // Whoever calls (the CLI, the experiments), the planners plan by SUMO's rules.
+  EvaluateOptions o = given;
+  o.config = as_sumo_drives(given.config);
   validate_options(o);
   // Built (and a model loaded) once, before the directory is touched.
   Planners planners;

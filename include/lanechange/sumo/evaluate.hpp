@@ -31,7 +31,8 @@ struct EvaluateOptions {
   sim::PlannerFactory make_planner = planner::make_planner;
 };
 
-/// Runs (or resumes) the episodes. libsumo holds one simulation per process,
+/// Runs (or resumes) the episodes, the planners made with as_sumo_drives(config).
+/// libsumo holds one simulation per process,
 /// so `run.jobs` worker processes (forked; 0: one per core) share the shards
 /// of this rank. Throws InputError for bad options or a directory holding
 /// another evaluation (left untouched); std::runtime_error naming the failed
