@@ -74,6 +74,18 @@ std::vector<StartPoint> recorded_car_starts(const Recording& rec, const ImportSe
   return out;
 }
 
+// The scene's safe distances are stated for a car of the default vehicle's
+// length, centre to centre: a recorded ego of another length keeps the same
+// clear space, or a truck's centre distance would let its body overlap a car.
+void ride_in_recorded_body(Scenario& s, const Obstacle& ego) {
+  const double longer_by = ego.length - s.vehicle.length;
+  for (SafeDistance* d :
+       {&s.safe_distance.leader, &s.safe_distance.follower, &s.safe_distance.target}) {
+    d->standstill = std::max(0.0, d->standstill + longer_by);
+  }
+  s.vehicle = {ego.length, ego.width};
+}
+
 class Cutter {
  public:
   Cutter(const Recording& rec, const Config& defaults, const ImportSettings& settings)
@@ -105,7 +117,7 @@ class Cutter {
     s.target_side = side;
     s.behavior = settings_.behavior;
     s.limits.v.hi = std::max(s.limits.v.hi, settings_.max_speed);
-    if (start.recorded) s.vehicle = {start.recorded->length, start.recorded->width};
+    if (start.recorded) ride_in_recorded_body(s, *start.recorded);
     const double sign = mirror_sign(side);
     s.ego = {0.0, sign * ego.d, start.state.velocity,
              sign * wrapped(start.state.orientation - ego.heading), start.state.acceleration};

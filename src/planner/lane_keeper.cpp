@@ -1,6 +1,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 
 #include "lanechange/planner/planner.hpp"
 #include "lanechange/traffic.hpp"
@@ -140,6 +141,20 @@ double lane_margin(const Observation& o, bool target_lane) {
   return margin;
 }
 
+// The nearest car of a lane with its body wholly ahead of the ego's: one
+// already beside the ego is passing or being passed, and braking for it only
+// stops the ego in the way of the cars behind.
+std::optional<LaneCar> car_ahead_of_body(const Observation& o, bool target_lane) {
+  const Lane lane = target_lane ? Lane::Target : Lane::Ego;
+  double from = o.ego.x;
+  while (const auto car = lanechange::nearest_in_lane(*o.scene, o.cars, lane, from, true)) {
+    const double dx = o.car(*car).x - o.ego.x;
+    if (o.scene->bumper_gap(*car, dx) > 0.0) return lane_car(o, *car);
+    from = o.car(*car).x;
+  }
+  return std::nullopt;
+}
+
 }  // namespace
 
 bool fallback_in_target_lane(const Observation& o) {
@@ -162,7 +177,7 @@ EgoControl fallback_control(const LaneKeeper& keeper, const Observation& o) {
   const bool in_other_lane =
       target_lane ? o.ego.y - half_body < w / 2.0 : o.ego.y + half_body > w / 2.0;
   if (in_other_lane) {
-    u.a = std::min(u.a, keeper.control(o.ego, center, car_ahead(o, !target_lane)).a);
+    u.a = std::min(u.a, keeper.control(o.ego, center, car_ahead_of_body(o, !target_lane)).a);
     // Backing out, the ego is in the way of the target lane's cars until its
     // body has left, 4 s and more at the keeper's calm heading; a sharper
     // one is the user's choice (docs/closed_loop.md, "Backing out").

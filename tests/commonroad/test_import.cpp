@@ -82,6 +82,32 @@ TEST(CommonRoadImport, ARecordedCarsSceneRecordsWhenAndIntoWhichGapItsDriverChan
   EXPECT_FALSE(stayer.origin->human_change.has_value());
 }
 
+TEST(CommonRoadImport, ARecordedTruckKeepsTheClearSpaceOfTheSafeDistances) {
+  // The safe distances are stated centre to centre for the default car: as
+  // the ego, the 12 m truck must keep the same clear space to every car, not
+  // have its extra length eaten out of it.
+  ImportSettings settings;
+  settings.egos = EgoChoice::RecordedCars;
+  settings.cars = {3};
+  settings.right = true;
+  const ImportReport report = import_text(two_lane_commonroad(), settings);
+  ASSERT_EQ(report.scenes.size(), 1u);
+  const Scenario& s = report.scenes[0].scene;
+  EXPECT_DOUBLE_EQ(s.vehicle.length, 12.0);
+  const Config defaults;
+  ASSERT_GT(s.car_count(), 0u);
+  for (CarIndex c = 0; c < s.car_count(); ++c) {
+    for (const auto& [stated, used] :
+         {std::pair{defaults.safety.leader, s.safe_distance.leader},
+          std::pair{defaults.safety.follower, s.safe_distance.follower},
+          std::pair{defaults.safety.target, s.safe_distance.target}}) {
+      const double clear_space = s.bumper_gap(c, s.centre_safe_distance(c, used).standstill);
+      EXPECT_NEAR(clear_space, stated.standstill - defaults.vehicle.length, 1e-9) << s.cars[c].id;
+      EXPECT_DOUBLE_EQ(used.time_headway, stated.time_headway);
+    }
+  }
+}
+
 TEST(CommonRoadImport, ASideWithoutALaneIsSkippedAndCounted) {
   ImportSettings settings;
   settings.right = true;

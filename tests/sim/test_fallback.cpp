@@ -63,6 +63,23 @@ TEST(Fallback, BrakesForTheCarAheadInTheLaneItIsLeaving) {
   EXPECT_GT(planner::fallback_control(keeper, over_the_line(scene, 0.0)).a, 0.0);
 }
 
+TEST(Fallback, DoesNotBrakeForACarAlreadyBesideItInTheLaneItIsLeaving) {
+  // Braking cannot take the ego away from a car beside it, only stop it in
+  // the way of the cars behind; its own lane and the cars wholly ahead decide.
+  Scenario scene = testing::open_road_scenario();
+  const double w = scene.lane_width;
+  const planner::LaneKeeper keeper(testing::untimed_config());
+  scene.follower() = {-200.0, 6.0, 0.0};
+  const EgoControl alone = planner::fallback_control(keeper, over_the_line(scene, 0.4 * w));
+  scene.follower() = {2.0, 6.0, 0.0};  // beside the ego's body, slower
+  const auto beside = over_the_line(scene, 0.4 * w);
+  ASSERT_FALSE(planner::fallback_in_target_lane(beside));
+  ASSERT_GT(beside.ego.y + scene.vehicle.width / 2.0, w / 2.0);  // the body pokes across
+  EXPECT_DOUBLE_EQ(planner::fallback_control(keeper, beside).a, alone.a);
+  scene.follower() = {7.0, 6.0, 0.0};  // its rear 2.6 m ahead of the ego's front
+  EXPECT_LT(planner::fallback_control(keeper, over_the_line(scene, 0.4 * w)).a, alone.a - 1.0);
+}
+
 // Seconds until the ego's body has left the target lane under the fallback,
 // backing out of a cut-in in front of a faster follower (every car keeps its
 // speed), and the largest |heading| and final offset from the ego lane on
