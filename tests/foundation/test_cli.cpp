@@ -87,7 +87,9 @@ TEST(Cli, SampleWritesReproducibleValidFiles) {
   ASSERT_EQ(run_cli("sample --count 5 --seed 11 --out " + a).exit_code, 0);
   ASSERT_EQ(run_cli("sample --count 5 --seed 11 --out " + b).exit_code, 0);
   for (int i = 0; i < 5; ++i) {
-    const std::string name = "/scenario_00000" + std::to_string(i) + ".json";
+    std::string name = "/scenario_00000";
+    name += std::to_string(i);
+    name += ".json";
     EXPECT_EQ(testing::read_text(a + name), testing::read_text(b + name));
     EXPECT_EQ(run_cli("validate --scenario " + a + name).exit_code, 0);
   }
