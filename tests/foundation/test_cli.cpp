@@ -90,8 +90,11 @@ TEST(Cli, SampleWritesReproducibleValidFiles) {
     std::string name = "/scenario_00000";
     name += std::to_string(i);
     name += ".json";
-    EXPECT_EQ(testing::read_text(a + name), testing::read_text(b + name));
-    EXPECT_EQ(run_cli("validate --scenario " + a + name).exit_code, 0);
+    const std::string file = a + name;
+    EXPECT_EQ(testing::read_text(file), testing::read_text(b + name));
+    std::string validate = "validate --scenario ";
+    validate += file;
+    EXPECT_EQ(run_cli(validate).exit_code, 0);
   }
 }
 
