@@ -1,6 +1,7 @@
 // Where a plan's time goes, scene by scene: the expert plans sampled scenes
 // (default config, seed 2026, as bench_expert) one after another on this
-// thread and prints, per plan, its status, rounds, node QPs (those spent on
+// thread and prints, per plan, its status, objective (to compare search
+// variants' optima), rounds, node QPs (those spent on
 // incumbents apart), interior-point iterations and CPU time, then the
 // median and mean plan and the totals. Not a timing claim of its own (the
 // benchmarks make those); it shows which plans and rounds carry the mean.
@@ -76,9 +77,10 @@ int main(int argc, char** argv) {
     const std::string status(ex::to_string(result.status));
     if (!quiet) {
       std::printf(
-          "%4d %-15s rounds %2zu  QPs %5ld (incumbents %4ld)  iterations %6ld  %8.1f ms |%s\n", i,
-          status.c_str(), result.rounds.size(), nodes, incumbent_qps, iterations, ms,
-          per_round.c_str());
+          "%4d %-15s objective %12.6f  rounds %2zu  QPs %5ld (incumbents %4ld)  iterations %6ld  "
+          "%8.1f ms |%s\n",
+          i, status.c_str(), result.objective, result.rounds.size(), nodes, incumbent_qps,
+          iterations, ms, per_round.c_str());
     }
     totals.rounds += static_cast<long>(result.rounds.size());
     totals.nodes += nodes;

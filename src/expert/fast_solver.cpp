@@ -570,15 +570,20 @@ bool reachable(const FastWorkspace& ws, const std::vector<int>& modes) {
 // keeps moving the same way with doubling steps (the warm start's switch
 // times can be a second or more off), and the search stops as soon as
 // `settled()` says no sequence can beat the incumbent by more than the gap.
-template <class Accept, class Settled>
+template <class Accept, class Settled, class Level>
 void improve_switches(const LaneChangeQp& qp, std::vector<int> modes, double objective,
-                      FastWorkspace& ws, long& nodes, Accept&& accept, Settled&& settled) {
+                      FastWorkspace& ws, long& nodes, Accept&& accept, Settled&& settled,
+                      Level&& prune_level) {
   std::vector<int> trial;
   auto try_move = [&](int j, int step) {
     if (!move_switch(modes, j, step, trial) || !reachable(ws, trial)) return false;
-    NodeOutcome o = solve_node(qp, trial, ws, objective);  // only a better one counts
+    // Only a move that could still become the incumbent counts: one above
+    // the search's prune level (the incumbent, or the caller's cutoff) is
+    // stopped by its dual bound within a few iterations.
+    const double cap = std::min(objective, prune_level());
+    NodeOutcome o = solve_node(qp, trial, ws, cap);
     ++nodes;
-    if (!o.feasible || o.objective >= objective - 1e-12) return false;
+    if (!o.feasible || o.objective >= cap - 1e-12) return false;
     objective = o.objective;
     modes = trial;
     accept(o);
@@ -715,6 +720,7 @@ void Search::find_incumbent(const NodeOutcome& root, const SolveHints& hints) {
            out_of_work();
   };
   auto accept = [this](NodeOutcome& o) { this->accept(o); };
+  auto level = [this] { return prune_level(); };
   std::vector<std::pair<double, std::vector<int>>> starts;
   std::vector<int> rounded = rounded_modes(qp_, ws_, root.path);
   if (hints.modes != nullptr && static_cast<int>(hints.modes->size()) == qp_.steps + 1) {
@@ -735,7 +741,7 @@ void Search::find_incumbent(const NodeOutcome& root, const SolveHints& hints) {
             [](const auto& a, const auto& b) { return a.first < b.first; });
   for (const auto& [objective, modes] : starts) {
     if (!std::isfinite(objective) || settled()) continue;
-    improve_switches(qp_, modes, objective, ws_, out_.nodes, accept, settled);
+    improve_switches(qp_, modes, objective, ws_, out_.nodes, accept, settled, level);
   }
 }
 
