@@ -1,10 +1,12 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <thread>
 
 #include "lanechange/error.hpp"
 #include "lanechange/run/quantile.hpp"
@@ -154,6 +156,60 @@ TEST(NearestRank, IsAnElementOfTheFiniteValuesAtItsRank) {
   EXPECT_EQ(run::nearest_rank(v, 0.99), 5);
   EXPECT_TRUE(std::isnan(run::nearest_rank({NAN}, 0.5)));
   EXPECT_TRUE(std::isnan(run::nearest_rank({}, 0.5)));
+}
+
+// The outcome of a row: every column but the step times and the overrun
+// count, which measure the machine.
+std::string outcome_columns(const std::string& row) {
+  std::string kept = without_times(row);
+  const auto columns = sim::rollout_columns();
+  const auto overruns = static_cast<std::size_t>(
+      std::find(columns.begin(), columns.end(), "overruns") - columns.begin());
+  std::size_t start = 0;
+  for (std::size_t i = 0; i < overruns; ++i) start = kept.find('|', start) + 1;
+  return kept.erase(start, kept.find('|', start) + 1 - start);
+}
+
+// Under the deadline of work (the default) the expert stops at the same point
+// however loaded the machine is: one job, and two jobs beside threads that
+// keep every core busy, give the same outcomes. The budget is cut so that it
+// binds in most re-plans; a run without it shows that it did.
+TEST(Evaluate, UnderTheDeadlineOfWorkLoadAndJobsChangeNoOutcome) {
+  testing::TempDir dir;
+  auto options = [&dir](const std::string& name, bool budgets) {
+    auto o = small(dir.file(name));
+    o.count = 4;
+    o.planners = {"miqp"};
+    o.config.closed_loop.deadline = Deadline::Work;
+    o.config.closed_loop.step_budget_ms = Config{}.closed_loop.step_budget_ms;
+    o.config.closed_loop.step_qp_iterations = budgets ? 60 : 1000000;
+    return o;
+  };
+  (void)sim::evaluate(options("one", true), {1, nullptr, false});
+  std::atomic<bool> busy = true;
+  std::vector<std::thread> load;
+  for (unsigned t = 0; t < std::max(2U, std::thread::hardware_concurrency()); ++t) {
+    load.emplace_back([&busy] {
+      volatile double x = 1.0;
+      while (busy.load(std::memory_order_relaxed)) x = x * 1.0000001 + 1e-9;
+    });
+  }
+  (void)sim::evaluate(options("two", true), {2, nullptr, false});
+  busy = false;
+  for (std::thread& t : load) t.join();
+  (void)sim::evaluate(options("unbounded", false), {2, nullptr, false});
+  const auto one = lines_of(dir.file("one/rollouts.csv"));
+  const auto two = lines_of(dir.file("two/rollouts.csv"));
+  const auto unbounded = lines_of(dir.file("unbounded/rollouts.csv"));
+  ASSERT_EQ(one.size(), 5U);
+  ASSERT_EQ(two.size(), one.size());
+  ASSERT_EQ(unbounded.size(), one.size());
+  int moved_by_budgets = 0;
+  for (std::size_t i = 1; i < one.size(); ++i) {
+    EXPECT_EQ(outcome_columns(two[i]), outcome_columns(one[i])) << "row " << i;
+    moved_by_budgets += outcome_columns(unbounded[i]) != outcome_columns(one[i]) ? 1 : 0;
+  }
+  EXPECT_GT(moved_by_budgets, 0) << "the budgets never bound: the test shows nothing";
 }
 
 TEST(Evaluate, MpiRanksWriteWhatThreadsWrite) {
