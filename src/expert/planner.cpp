@@ -244,6 +244,8 @@ RoundSolution solve_round(const RoundContext& c, const Iterate& point, double ra
   const TrafficPrediction base = result.prediction;
   LaneChangeSolution work;
   const std::vector<Gap> gaps = gaps_in_order(c, result, point);
+  // The least bound over the gaps, for a round that a budget cuts.
+  double bound = kInfinity;
   for (const Gap& gap : gaps) {
     const Iterate own_point =
         warm_start_per_gap ? warm_start(c.scenario, c.config, base, gap) : Iterate{};
@@ -257,6 +259,8 @@ RoundSolution solve_round(const RoundContext& c, const Iterate& point, double ra
                         (!best.solution.has_solution() || s.objective < best.solution.objective);
     const bool failed = s.status != MiqpStatus::Infeasible && s.status != MiqpStatus::Cutoff &&
                         s.status != MiqpStatus::Optimal;
+    if (s.status != MiqpStatus::Infeasible) bound = std::min(bound, s.best_bound);
+    if (failed && &gap != &gaps.back()) bound = -kInfinity;  // gaps left unsolved
     if (better || failed) {
       auto occupancy = occupancy_of(g.qp, s.modes);
       best = {std::move(g.solution), std::move(occupancy), gap};
@@ -272,6 +276,9 @@ RoundSolution solve_round(const RoundContext& c, const Iterate& point, double ra
       gaps.size() > 1) {
     best.solution.message = "no gap of the target lane is feasible";
   }
+  // A round solved to the end is optimal within the gap tolerances.
+  const bool solved_to_the_end = best.solution.status == MiqpStatus::Optimal;
+  best.solution.best_bound = solved_to_the_end ? best.solution.objective : bound;
   best.solution.nodes = work.nodes;
   best.solution.qp_iterations = work.qp_iterations;
   best.solution.incumbent_qps = work.incumbent_qps;
@@ -293,6 +300,7 @@ void adopt(ExpertResult& result, const RoundSolution& round) {
   result.modes = round.solution.modes;
   result.occupancy = round.occupancy;
   result.objective = round.solution.objective;
+  result.best_bound = round.solution.best_bound;
 }
 
 // A round that fails ends the plan. One stopped by the plan's budget with
@@ -627,6 +635,8 @@ Trajectory ExpertPlanner::to_trajectory(const ExpertResult& result,
     return c ? nlohmann::json(scenario.cars[*c].id) : nlohmann::json();
   };
   t.details = {{"objective", result.objective},
+               {"best_bound", std::isfinite(result.best_bound) ? nlohmann::json(result.best_bound)
+                                                               : nlohmann::json()},
                {"iterations", result.iterations()},
                {"status", to_string(result.status)},
                {"solver", solver_->name()},

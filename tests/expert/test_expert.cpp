@@ -670,8 +670,20 @@ TEST(Planner, ABudgetOfWorkStopsThePlanAtTheSamePointEveryTime) {
   limits.qp_iterations = spent / 2;
   const ExpertResult cut = planner.plan(s, limits);
   EXPECT_EQ(cut.status, PlanStatus::WorkLimit) << cut.reason;
-  // Anytime: the cut plan keeps the best path it found by then.
+  // Anytime: the cut plan keeps the best path it found by then, and says
+  // how far from proven it is.
   EXPECT_TRUE(cut.cut_with_incumbent());
+  EXPECT_LE(cut.best_bound, cut.objective);
+  EXPECT_GT(cut.relative_gap(), 0.0);
+  EXPECT_EQ(full.best_bound, full.objective);
+  EXPECT_EQ(full.relative_gap(), 0.0);
+  // Through one gap, the cut search's open nodes bound the optimum: finite.
+  PlanHints one_gap;
+  one_gap.gap = &full.gap;
+  const ExpertResult cut_in_gap = planner.plan(s, limits, one_gap);
+  ASSERT_TRUE(cut_in_gap.cut_with_incumbent()) << cut_in_gap.reason;
+  EXPECT_TRUE(std::isfinite(cut_in_gap.best_bound));
+  EXPECT_LE(cut_in_gap.best_bound, cut_in_gap.objective);
   EXPECT_EQ(cut.path.states.size(), full.path.states.size());
   EXPECT_FALSE(full.cut_with_incumbent());
   long cut_spent = 0;

@@ -17,6 +17,7 @@
 #include "lanechange/config.hpp"
 #include "lanechange/expert/formulation.hpp"
 #include "lanechange/expert/lane_change_solver.hpp"
+#include "lanechange/expert/miqp.hpp"
 #include "lanechange/scenario.hpp"
 #include "lanechange/trajectory.hpp"
 
@@ -58,9 +59,17 @@ struct ExpertResult {
   /// best of those config.expert.gap allows.
   Gap gap;
   double objective = kInfinity;  ///< of the last round's MIQP
+  /// A proven lower bound on that MIQP's optimum: the objective itself where
+  /// the round was solved to the end; below it where a budget cut the round
+  /// with an incumbent (the least bound of the nodes and gaps left, -infinity
+  /// where a gap was not reached).
+  double best_bound = -kInfinity;
   std::vector<RoundReport> rounds;
   double total_ms = 0.0;
   [[nodiscard]] int iterations() const { return static_cast<int>(rounds.size()); }
+  /// (objective - best_bound) / max(1, |objective|): 0 for a round solved to
+  /// the end, infinite where no bound is known.
+  [[nodiscard]] double relative_gap() const { return expert::relative_gap(objective, best_bound); }
   /// Stopped by its budget (TimeLimit or WorkLimit) with a path: the cut
   /// round's incumbent, else the last round's solution. Feasible for its
   /// round's MIQP, but neither proven optimal nor converged: an anytime
