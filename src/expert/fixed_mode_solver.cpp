@@ -58,6 +58,12 @@ LaneChangeSolution FixedModeLaneChangeSolver::solve(const LaneChangeQp& qp,
     out.message = "no reachable state meets the lane modes";
   }
   if (!out.message.empty()) return out;
+  // A caller's budget already spent (a step's, shared with other solves).
+  if (settings.qp_iteration_limit <= 0 || settings.time_limit_s <= 0.0) {
+    out.status = settings.qp_iteration_limit <= 0 ? MiqpStatus::WorkLimit : MiqpStatus::TimeLimit;
+    out.message = "the budget is spent";
+    return out;
+  }
   std::unique_ptr<LaneChangeWorkspace> owned;
   detail::FastWorkspace& ws = detail::workspace_for(hints, owned);
   // With the modes fixed, a plan's rounds (and a screen's candidates) solve

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <optional>
 
 #include "lanechange/error.hpp"
@@ -22,6 +23,19 @@ Config with_paper_gap(Config config) {
 
 double ms_since(Clock::time_point start) {
   return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+}
+
+// What a plan's budget leaves once `spent` of its interior-point iterations
+// are used and the time since `since` has passed: the screens, every
+// candidate's rounds and the exact search share one step budget, so that a
+// step under closed_loop.deadline = work stops where its budget says.
+expert::PlanLimits left_of(const expert::PlanLimits& limits, Clock::time_point since, long spent) {
+  expert::PlanLimits left;
+  left.time_limit_s = std::max(0.0, limits.time_limit_s - ms_since(since) / 1000.0);
+  left.qp_iterations = limits.qp_iterations == std::numeric_limits<long>::max()
+                           ? limits.qp_iterations
+                           : std::max(0L, limits.qp_iterations - spent);
+  return left;
 }
 
 long qp_iterations_of(const expert::ExpertResult& result) {
@@ -206,10 +220,11 @@ void StrategyQpPlanner::follow_in_order(const Scenario& scene, const expert::Pla
                                         const expert::PlanHints& hints,
                                         const std::vector<Candidate>& list, bool stop_at_first,
                                         StrategyPlan& out, std::vector<int>& rescued_hint) const {
+  const auto start = Clock::now();
   expert::ExpertResult plan;
   for (const Candidate& c : list) {
     CandidateOutcome o =
-        solve_candidate(scene, c.modes, limits,
+        solve_candidate(scene, c.modes, left_of(limits, start, out.qp_iterations),
                         {c.first_point(hints), hints.modes, c.starts_from_plan(hints)}, plan);
     o.strategy = c.strategy;
     const bool taken = take_candidate(o, c.modes, plan, out, rescued_hint);
@@ -238,8 +253,9 @@ void StrategyQpPlanner::follow_screened(const Scenario& scene, const expert::Pla
   const bool last_plan_first = !list.empty() && list.front().strategy.empty() &&
                                list.front().starts_from_plan(hints) && hints.path != nullptr;
   if (last_plan_first) {
-    CandidateOutcome o = solve_candidate(scene, list.front().modes, limits,
-                                         {hints.path, nullptr, true, hints.workspace}, plan);
+    CandidateOutcome o =
+        solve_candidate(scene, list.front().modes, left_of(limits, start, out.qp_iterations),
+                        {hints.path, nullptr, true, hints.workspace}, plan);
     if (take_candidate(o, list.front().modes, plan, out, rescued_hint)) {
       out.chosen = 0;
       held = 1;
@@ -254,8 +270,8 @@ void StrategyQpPlanner::follow_screened(const Scenario& scene, const expert::Pla
     // bound that proves it is enough, and the rest of its QP is saved.
     double cutoff = expert::kInfinity;
     if (config_.strategy_qp.screen_cutoff) cutoff = best_screen;
-    screens.push_back(
-        screen_one(scene, hints, c, cutoff, first, {screen_solver_, workspace.get()}));
+    screens.push_back(screen_one(scene, hints, c, cutoff, left_of(limits, start, out.qp_iterations),
+                                 first, {screen_solver_, workspace.get()}));
     out.qp_iterations += screens.back().qp_iterations;
     CandidateOutcome o;
     o.strategy = c.strategy;
@@ -295,7 +311,8 @@ void StrategyQpPlanner::follow_screened(const Scenario& scene, const expert::Pla
     CandidateOutcome& o = out.candidates[i];
     const std::string strategy = o.strategy;
     const double screen_objective = o.screen_objective;
-    o = solve_candidate(scene, list[i].modes, limits, from_screen, plan);
+    o = solve_candidate(scene, list[i].modes, left_of(limits, start, out.qp_iterations),
+                        from_screen, plan);
     o.strategy = strategy;
     o.screen_objective = screen_objective;
     if (take_candidate(o, list[i].modes, plan, out, rescued_hint)) out.chosen = static_cast<int>(i);
@@ -307,10 +324,13 @@ void StrategyQpPlanner::follow_screened(const Scenario& scene, const expert::Pla
 expert::LaneChangeSolution StrategyQpPlanner::screen_one(const Scenario& scene,
                                                          const expert::PlanHints& hints,
                                                          const Candidate& c, double cutoff,
+                                                         const expert::PlanLimits& left,
                                                          expert::LinearizedRound& first,
                                                          const Screener& screener) const {
   expert::MiqpSettings settings;
   settings.objective_cutoff = cutoff;
+  settings.time_limit_s = left.time_limit_s;
+  settings.qp_iteration_limit = left.qp_iterations;
   if (c.first) {
     return screener.solver.solve(c.first->qp, settings,
                                  {screener.workspace, &c.modes, &c.first->point.controls});
@@ -349,17 +369,19 @@ void StrategyQpPlanner::search_neighbours(const Scenario& scene, const expert::P
   expert::LinearizedRound first;
   expert::ExpertResult plan;
   std::vector<int> unused_hint;
+  const auto start = Clock::now();
   for (const Candidate& c : list) {
-    const expert::LaneChangeSolution screen =
-        screen_one(scene, from_plan, c, out.result.objective, first,
-                   {neighbour_screen_solver_, workspace.get()});
+    const expert::LaneChangeSolution screen = screen_one(
+        scene, from_plan, c, out.result.objective, left_of(limits, start, out.qp_iterations), first,
+        {neighbour_screen_solver_, workspace.get()});
     out.qp_iterations += screen.qp_iterations;
     CandidateOutcome o;
     const bool has_point =
         screen.status == expert::MiqpStatus::Optimal || screen.status == expert::MiqpStatus::Cutoff;
     if (!has_point) o.status = expert::PlanStatus::Infeasible;
     if (screen.status == expert::MiqpStatus::Optimal && screen.objective < out.result.objective) {
-      o = solve_candidate(scene, c.modes, limits, {&screen.path, nullptr, true}, plan);
+      o = solve_candidate(scene, c.modes, left_of(limits, start, out.qp_iterations),
+                          {&screen.path, nullptr, true}, plan);
       if (take_candidate(o, c.modes, plan, out, unused_hint)) {
         out.chosen = static_cast<int>(out.candidates.size());
       }
@@ -386,20 +408,21 @@ StrategyPlan StrategyQpPlanner::plan(const Scenario& scene, const expert::PlanLi
   const std::vector<Candidate> list = candidates_of(scene, hints);
   out.predict_ms = ms_since(start);
   std::vector<int> rescued_hint;
+  // Each stage takes the time the ones before left (its iterations it reads
+  // off out.qp_iterations).
   if (config_.strategy_qp.screen) {
-    follow_screened(scene, limits, hints, list, out, rescued_hint);
-    search_neighbours(scene, limits, out);
+    follow_screened(scene, left_of(limits, start, 0), hints, list, out, rescued_hint);
+    search_neighbours(scene, left_of(limits, start, 0), out);
   } else {
-    follow_in_order(scene, limits, hints, list, config_.strategy_qp.first_feasible, out,
-                    rescued_hint);
+    follow_in_order(scene, left_of(limits, start, 0), hints, list,
+                    config_.strategy_qp.first_feasible, out, rescued_hint);
   }
   if (out.chosen < 0) {
     // No candidate holds: the exact search, started from the likeliest modes.
     if (rescued_hint.empty() && !list.empty()) rescued_hint = list.front().modes;
     // Only what the candidates left of the limit: a step budget is one budget.
-    const expert::PlanLimits left{std::max(0.0, limits.time_limit_s - ms_since(start) / 1000.0)};
     out.result = exact_.plan(
-        scene, left,
+        scene, left_of(limits, start, out.qp_iterations),
         {hints.path, rescued_hint.empty() ? nullptr : &rescued_hint, hints.path_is_plan});
     out.qp_iterations += qp_iterations_of(out.result);
   }

@@ -129,11 +129,12 @@ class StrategyQpPlanner final : public ClosedLoopPlanner {
     expert::LaneChangeWorkspace* workspace;
   };
   /// The first round's QP of `c` solved with its modes fixed and `cutoff`
-  /// by `screener`; `first` holds the shared linearization and is rebuilt
-  /// when `c` has a start of its own.
+  /// by `screener`, within what is `left` of the plan's budget; `first` holds
+  /// the shared linearization and is rebuilt when `c` has a start of its own.
   [[nodiscard]] expert::LaneChangeSolution screen_one(const Scenario& scene,
                                                       const expert::PlanHints& hints,
                                                       const Candidate& c, double cutoff,
+                                                      const expert::PlanLimits& left,
                                                       expert::LinearizedRound& first,
                                                       const Screener& screener) const;
   /// neighbour_nodes: tries the followed strategy's neighbours.

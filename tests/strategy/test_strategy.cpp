@@ -11,6 +11,7 @@
 
 #include "lanechange/error.hpp"
 #include "lanechange/expert/planner.hpp"
+#include "lanechange/expert/structured_qp.hpp"
 #include "lanechange/learn/strategy.hpp"
 #include "lanechange/sampler.hpp"
 #include "lanechange/sim/simulator.hpp"
@@ -475,6 +476,32 @@ TEST(Strategy, AGoodPredictionIsFollowedWithTheExactCost) {
   ASSERT_GE(learned.chosen, 0);
   EXPECT_EQ(learned.candidates[static_cast<std::size_t>(learned.chosen)].strategy, truth);
   EXPECT_NEAR(learned.result.objective, exact.objective, 0.01 * exact.objective);
+}
+
+// A step's budget of work is one budget: the screens, every candidate's
+// rounds and the exact search share it, so a plan stops within one QP of it
+// (a closed-loop step under closed_loop.deadline = work).
+TEST(Strategy, APlanSpendsNoMoreThanItsBudgetOfWork) {
+  Config config = testing::untimed_config();
+  const Scenario s = testing::open_road_scenario();
+  // One vote, solved as a candidate (no vote pool) and failing: its screen
+  // and rounds, then the exact search.
+  config.strategy_qp.vote_pool = config.strategy_qp.candidates;
+  const planner::StrategyQpPlanner p(config, model_of({s}, {"2"}));
+  const planner::StrategyPlan free = p.plan(s);
+  ASSERT_EQ(free.chosen, -1);
+  ASSERT_EQ(free.result.status, PlanStatus::Converged);
+  ASSERT_GT(free.qp_iterations, 200);
+  for (const long budget : {0L, 20L, free.qp_iterations / 2}) {
+    expert::PlanLimits limits;
+    limits.qp_iterations = budget;
+    const planner::StrategyPlan cut = p.plan(s, limits);
+    EXPECT_LE(cut.qp_iterations, budget + expert::QpSettings{}.max_iterations) << budget;
+    EXPECT_NE(cut.result.status, PlanStatus::Converged) << budget;
+  }
+  expert::PlanLimits roomy;
+  roomy.qp_iterations = free.qp_iterations + 1;
+  EXPECT_EQ(p.plan(s, roomy).result.objective, free.result.objective);
 }
 
 // Closed loop's steady state: re-planned from its own plan, with its own
