@@ -371,7 +371,7 @@ TEST(Strategy, RowsWithoutOneHotBehaviorsAreAllScanned) {
   std::mt19937_64 rng(3);
   std::normal_distribution<double> normal;
   for (int i = 0; i < 100; ++i) {
-    Eigen::VectorXd q = rows.features[static_cast<std::size_t>(3 * (1 + i))];
+    Eigen::VectorXd q = rows.features[3 * (1 + static_cast<std::size_t>(i))];
     for (Eigen::Index j = 0; j < 14; ++j) q(j) += 0.5 * normal(rng);
     EXPECT_EQ(model.predict(q, 7), model.predict_by_scan(q, 7)) << "query " << i;
   }
