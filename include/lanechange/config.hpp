@@ -225,8 +225,8 @@ struct ClosedLoopSettings {
   double step_budget_ms = 100.0;  ///< the step's deadline (see deadline)
   Deadline deadline = Deadline::Work;
   /// The expert's interior-point iterations per step under Deadline::Work:
-  /// the slowest step about 90 ms on the reference machine (docs/closed_loop.md).
-  int step_qp_iterations = 2500;
+  /// the slowest step about 30 ms on the reference machine (docs/closed_loop.md).
+  int step_qp_iterations = 1000;
   int replan_period = 1;  ///< the expert re-plans every this many steps
   /// Shrinking: a receding plan keeps putting the crossing off to its end
   /// and waits at the line (docs/closed_loop.md).
