@@ -25,6 +25,7 @@
 #include "lanechange/expert/planner.hpp"
 #include "lanechange/run/quantile.hpp"
 #include "lanechange/sampler.hpp"
+#include "thread_cpu.hpp"
 
 namespace {
 
@@ -106,14 +107,6 @@ struct Samples {
   std::vector<bool> plan_converged, fixed_gap_converged, eight_car_converged;  // per plan
 };
 Samples g_samples;
-
-// CPU time of this thread: the solvers are single-threaded, and on a shared
-// machine wall time would also count the other processes.
-double thread_cpu_ms() {
-  timespec t{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
-  return static_cast<double>(t.tv_sec) * 1e3 + static_cast<double>(t.tv_nsec) * 1e-6;
-}
 
 // How the fast solver's node QPs take their steps, for a comparison in the same run.
 struct NodeQpSteps {

@@ -4,7 +4,6 @@
 // in LANECHANGE_STRATEGY_MODEL (lanechange train), or else is fitted here on
 // the exact plans of scenes drawn with another seed (their starts only).
 #include <benchmark/benchmark.h>
-#include <time.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -18,6 +17,7 @@
 #include "lanechange/run/quantile.hpp"
 #include "lanechange/sampler.hpp"
 #include "planner/strategy_qp_planner.hpp"
+#include "thread_cpu.hpp"
 
 namespace lc = lanechange;
 
@@ -70,12 +70,6 @@ const std::vector<lc::Scenario>& scenes() {
   static const std::vector<lc::Scenario> all =
       sample(kTestSeed, env_int("LANECHANGE_BENCH_SCENARIOS", 100));
   return all;
-}
-
-double thread_cpu_ms() {
-  timespec t{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
-  return static_cast<double>(t.tv_sec) * 1e3 + static_cast<double>(t.tv_nsec) * 1e-6;
 }
 
 // Each plan's CPU time, for the median and tail the targets are stated in

@@ -8,7 +8,6 @@
 //   plan_stats [COUNT=100] [--quiet] [--fixed-gap] [--target-lane-cars N]
 // --fixed-gap plans through Eq. 1's gap alone (expert.gap = fixed);
 // --target-lane-cars samples dense scenes with N cars in the target lane.
-#include <time.h>
 
 #include <algorithm>
 #include <cstdio>
@@ -22,17 +21,12 @@
 
 #include "lanechange/expert/planner.hpp"
 #include "lanechange/sampler.hpp"
+#include "thread_cpu.hpp"
 
 namespace {
 
 namespace lc = lanechange;
 namespace ex = lanechange::expert;
-
-double thread_cpu_ms() {
-  timespec t{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
-  return static_cast<double>(t.tv_sec) * 1e3 + static_cast<double>(t.tv_nsec) * 1e-6;
-}
 
 struct Totals {
   long rounds = 0, nodes = 0, incumbent_qps = 0, iterations = 0;
