@@ -400,6 +400,12 @@ struct StrategyQpSettings {
   /// Without the screen: follow the first candidate that holds in the
   /// model's order (CoCo) instead of the cheapest of all (MLOPT).
   bool first_feasible = false;
+  /// A strategy is a gap and its lane modes. The votes go first to one gap:
+  /// the last plan's, else Eq. 1's (beside the ego). Where none of them
+  /// holds, this many other gaps around the ego get `replan_candidates` votes
+  /// each, in the order in which they open (learn::gap_open_time), before
+  /// the exact search. 0: one gap, as under expert.gap = fixed.
+  int other_gaps = 2;
 };
 
 /// How the other cars treat the car ahead of them (docs/traffic.md).

@@ -169,6 +169,7 @@ void Config::validate() const {
   require(strategy_qp.replan_candidates >= 1, "strategy_qp.replan_candidates",
           "must be at least 1");
   require(strategy_qp.screen_keep >= 1, "strategy_qp.screen_keep", "must be at least 1");
+  require(strategy_qp.other_gaps >= 0, "strategy_qp.other_gaps", "must not be negative");
 }
 
 TrafficSettings paper_traffic() {

@@ -249,6 +249,7 @@ void visit_fields(V& v, S& s) requires std::same_as<std::remove_const_t<S>, Stra
   v("neighbour_nodes", s.neighbour_nodes);
   v("timed_warm_start", s.timed_warm_start);
   v("first_feasible", s.first_feasible);
+  v("other_gaps", s.other_gaps);
 }
 
 template <class V, class S>

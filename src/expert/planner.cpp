@@ -557,10 +557,12 @@ LinearizedRound ExpertPlanner::first_round(const Scenario& scenario, const PlanH
   const double dt = scenario.horizon / scenario.steps;
   const int predicted_steps = predicted_steps_of(scenario, config);
   TrafficPrediction prediction = predict_traffic(scenario, config, predicted_steps, dt);
+  const Gap gap = hints.gap != nullptr ? *hints.gap : paper_gap(scenario);
   LinearizedRound out;
-  out.point = first_point(scenario, config, hints, prediction);
+  out.point =
+      hint_path_fits(scenario, hints) ? *hints.path : warm_start(scenario, config, prediction, gap);
   predict_along(scenario, config, predicted_steps, dt, out.point, prediction);
-  out.qp = build_lane_change_qp(scenario, config, out.point, prediction);
+  out.qp = build_lane_change_qp(scenario, config, out.point, prediction, gap);
   return out;
 }
 

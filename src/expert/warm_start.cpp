@@ -143,7 +143,8 @@ LateralMove move_timed_to(const Scenario& s, int touches, int across) {
 }  // namespace
 
 Iterate warm_start_for_modes(const Scenario& scenario, const Config& config,
-                             const TrafficPrediction& prediction, const std::vector<int>& modes) {
+                             const TrafficPrediction& prediction, const std::vector<int>& modes,
+                             const Gap& gap) {
   const LaneRule rule = config.expert.lane_rule;
   const int ego_lane = lane_mode_index(rule, LaneOccupancy::EgoLane);
   const int target_lane = lane_mode_index(rule, LaneOccupancy::TargetLane);
@@ -156,12 +157,17 @@ Iterate warm_start_for_modes(const Scenario& scenario, const Config& config,
   }
   // Under the either-or rule a node is in one lane or the other.
   if (touches >= 0 && across < 0 && rule == LaneRule::EitherOr) across = touches;
-  Iterate path = quintic_path(scenario, config, prediction,
-                              move_timed_to(scenario, touches, across), paper_gap(scenario));
+  Iterate path =
+      quintic_path(scenario, config, prediction, move_timed_to(scenario, touches, across), gap);
   // The flat start would give node 0 no heading; it has the ego's.
   path.states.front() = State(scenario.ego.x, scenario.ego.y, scenario.ego.v, scenario.ego.theta);
   fill_controls(path, scenario.horizon / scenario.steps);
   return path;
+}
+
+Iterate warm_start_for_modes(const Scenario& scenario, const Config& config,
+                             const TrafficPrediction& prediction, const std::vector<int>& modes) {
+  return warm_start_for_modes(scenario, config, prediction, modes, paper_gap(scenario));
 }
 
 Iterate warm_start(const Scenario& scenario, const Config& config,

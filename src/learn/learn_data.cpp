@@ -125,7 +125,7 @@ int slot_named(std::string_view name, const std::string& where) {
 
 struct Loader {
   LearningData& data;
-  Rows features, inputs, targets, plan_states, gap_features;
+  Rows features, inputs, targets, plan_states, gap_features, gap_view;
   // Per data set: scenario index -> row of the scenario table.
   std::vector<int> row_of_index;
 
@@ -190,6 +190,10 @@ struct Loader {
     const auto in_cols = csv.columns(data.action_inputs);
     const auto out_cols = csv.columns(data.action_targets);
     const auto node_cols = csv.columns(PlanNodeTable::columns());
+    // Format 4 sees each node through the plan's own gap.
+    const auto view_cols = data.dataset_format == data::kDatasetFormat
+                               ? csv.columns(expert::gap_view_names())
+                               : std::vector<std::size_t>{};
     const std::size_t c_index = csv.column("index"), c_label = csv.column("label"),
                       c_k = csv.column("k"), c_mode = csv.column("lane_mode");
     std::vector<std::string_view> f;
@@ -203,6 +207,7 @@ struct Loader {
       const int scenario = row_of_index[static_cast<std::size_t>(index)];
       PlanNodeTable& nodes = data.plan_nodes;
       for (std::size_t c : node_cols) plan_states.values.push_back(csv.number(f[c]));
+      for (std::size_t c : view_cols) gap_view.values.push_back(csv.number(f[c]));
       nodes.lane_mode.push_back(lane_mode_of(csv, f[c_mode]));
       nodes.node.push_back(static_cast<int>(csv.number(f[c_k])));
       nodes.scenario.push_back(scenario);
@@ -260,7 +265,7 @@ void adopt_or_compare(LearningData& data, const json& manifest, const std::strin
 LearningData load_learning_data(const std::vector<std::string>& dirs, const char* network_inputs) {
   if (dirs.empty()) throw InputError("--data", "at least one data set is needed");
   LearningData data;
-  Loader loader{data, {}, {}, {}, {}, {}, {}};
+  Loader loader{data, {}, {}, {}, {}, {}, {}, {}};
   for (const std::string& dir : dirs) {
     const data::DatasetSummary summary = data::summarize_dataset(dir);  // checks checksums
     const json manifest = data::read_manifest(dir);
@@ -270,6 +275,7 @@ LearningData load_learning_data(const std::vector<std::string>& dirs, const char
       loader.inputs.width = data.action_inputs.size();
       loader.targets.width = data.action_targets.size();
       loader.plan_states.width = PlanNodeTable::columns().size();
+      loader.gap_view.width = expert::gap_view_names().size();
       loader.gap_features.width = data.gap_classifier_features.size();
       loader.read_dataset(dir, manifest, static_cast<int>(data.datasets.size()));
     } catch (const json::exception& e) {
@@ -285,6 +291,7 @@ LearningData load_learning_data(const std::vector<std::string>& dirs, const char
   data.samples.inputs = loader.inputs.matrix();
   data.samples.targets = loader.targets.matrix();
   data.plan_nodes.states = loader.plan_states.matrix();
+  data.plan_nodes.gap_view = loader.gap_view.matrix();
   data.scenarios.gap_features = loader.gap_features.matrix();
   return data;
 }

@@ -38,9 +38,13 @@ struct NodeColumns {
 
 // The scene a plan node stands for: the ego and the cars there, the rest of
 // the horizon, the scenario's behavior. `last_a` is the acceleration applied
-// in the step before (the scene's ego.a means that).
-Eigen::VectorXd node_features(const Eigen::RowVectorXd& z, double last_a, double horizon_left,
-                              int behavior, double traffic_speed_cap) {
+// in the step before (the scene's ego.a means that). `view` (a row of
+// PlanNodeTable::gap_view, or empty) puts the plan's own gap's cars in the
+// follower's and target's places, as the planner votes for a gap; without
+// it the rows see the scene's follower and target.
+Eigen::VectorXd node_features(const Eigen::RowVectorXd& z, const Eigen::RowVectorXd& view,
+                              double last_a, double horizon_left, int behavior,
+                              double traffic_speed_cap) {
   static const NodeColumns c;
   Scenario scene = three_car_scenario(Config{});
   scene.set_behavior(static_cast<Behavior>(behavior));
@@ -48,6 +52,14 @@ Eigen::VectorXd node_features(const Eigen::RowVectorXd& z, double last_a, double
   for (Eigen::Index i = 0; i < 3; ++i) {
     const Eigen::Index at = c.cars + 3 * i;  // x, v, a of car i, in Role order
     scene.car(static_cast<Role>(i)) = {z(at), z(at + 1), z(at + 2)};
+  }
+  if (view.size() > 0) {
+    // The view holds behind, ahead, leader, each as dx, dv, a.
+    constexpr std::array<Role, 3> kViewRoles = {Role::Follower, Role::Target, Role::Leader};
+    for (Eigen::Index i = 0; i < 3; ++i) {
+      scene.car(kViewRoles[static_cast<std::size_t>(i)]) = {
+          scene.ego.x + view(3 * i), scene.ego.v + view(3 * i + 1), view(3 * i + 2)};
+    }
   }
   scene.horizon = horizon_left;
   return strategy_features(scene, traffic_speed_cap);
@@ -71,8 +83,12 @@ void add_plan(const LearningData& data, const std::vector<int>& rows, int stride
     const auto& z = t.states.row(rows[static_cast<std::size_t>(k)]);
     const double last_a =
         k == 0 ? z(c.ego_a0) : t.states(rows[static_cast<std::size_t>(k - 1)], c.a);
+    const Eigen::RowVectorXd view =
+        t.gap_view.rows() == t.states.rows()
+            ? Eigen::RowVectorXd(t.gap_view.row(rows[static_cast<std::size_t>(k)]))
+            : Eigen::RowVectorXd();
     out.features.push_back(
-        node_features(z, last_a, end_time - z(c.t), behavior, out.traffic_speed_cap));
+        node_features(z, view, last_a, end_time - z(c.t), behavior, out.traffic_speed_cap));
     out.labels.push_back(strategy_of(modes, k));
   }
 }
@@ -153,35 +169,87 @@ constexpr double kBoundSlack = 1e-5;
 
 }  // namespace
 
-double gap_open_time(const Scenario& s, double traffic_speed_cap) {
-  const SafetyMargins d = s.centre_safe_distances();
-  const double ahead_needed = d.target.standstill + d.target.time_headway * s.ego.v;
+namespace {
+
+// A side of a gap without a car: as the gap features read it, a car
+// kOpenGapDistance away at the ego's speed.
+CarState open_side(const EgoState& ego, double side) {
+  return {ego.x + side * expert::kOpenGapDistance, ego.v, 0.0};
+}
+
+// The three cars a strategy is voted on, and the safe distances to the two
+// that frame the gap.
+struct VotedCars {
+  CarState leader, behind, ahead;
+  SafeDistance behind_needed, ahead_needed;
+};
+
+VotedCars voted_cars(const Scenario& s, const expert::GapFrame& frame) {
+  std::optional<CarIndex> leader = s.roles[static_cast<std::size_t>(Role::Leader)];
+  if (!leader) {
+    std::vector<CarState> now;
+    now.reserve(s.car_count());
+    for (const OtherCar& car : s.cars) now.push_back(car.state);
+    leader = nearest_in_lane(s, now, Lane::Ego, s.ego.x, true);
+  }
+  const auto of = [&s](std::optional<CarIndex> car, SafeDistance base) {
+    return car ? s.centre_safe_distance(*car, base) : base;
+  };
+  return {leader ? s.car(*leader) : open_side(s.ego, 1.0),
+          frame.behind ? s.car(*frame.behind) : open_side(s.ego, -1.0),
+          frame.ahead ? s.car(*frame.ahead) : open_side(s.ego, 1.0),
+          of(frame.behind, s.safe_distance.follower), of(frame.ahead, s.safe_distance.target)};
+}
+
+double gap_open_time(const EgoState& ego, VotedCars cars, double traffic_speed_cap) {
+  const double ahead_needed = cars.ahead_needed.standstill + cars.ahead_needed.time_headway * ego.v;
   // The cars move as the constant-acceleration traffic model moves them
   // (stopping at 0, held at the cap), so the feature agrees with the scenes.
-  CarState target = s.target();
-  CarState follower = s.follower();
   for (int i = 0; i * kGapTimeStep <= kGapLookahead; ++i) {
     const double t = i * kGapTimeStep;
     if (i > 0) {
-      advance_constant_accel(target, kGapTimeStep, traffic_speed_cap);
-      advance_constant_accel(follower, kGapTimeStep, traffic_speed_cap);
+      advance_constant_accel(cars.ahead, kGapTimeStep, traffic_speed_cap);
+      advance_constant_accel(cars.behind, kGapTimeStep, traffic_speed_cap);
     }
-    const double ego_x = s.ego.x + s.ego.v * t;
-    const double behind_needed = d.follower.standstill + d.follower.time_headway * follower.v;
-    if (target.x - ego_x >= ahead_needed && ego_x - follower.x >= behind_needed) return t;
+    const double ego_x = ego.x + ego.v * t;
+    const double behind_needed =
+        cars.behind_needed.standstill + cars.behind_needed.time_headway * cars.behind.v;
+    if (cars.ahead.x - ego_x >= ahead_needed && ego_x - cars.behind.x >= behind_needed) return t;
   }
   return kGapLookahead;
 }
 
-Eigen::VectorXd strategy_features(const Scenario& s, double traffic_speed_cap) {
+}  // namespace
+
+expert::GapFrame paper_frame(const Scenario& scene) {
+  return {scene.roles[static_cast<std::size_t>(Role::Follower)],
+          scene.roles[static_cast<std::size_t>(Role::Target)]};
+}
+
+double gap_open_time(const Scenario& s, const expert::GapFrame& frame, double traffic_speed_cap) {
+  return gap_open_time(s.ego, voted_cars(s, frame), traffic_speed_cap);
+}
+
+double gap_open_time(const Scenario& s, double traffic_speed_cap) {
+  return gap_open_time(s, paper_frame(s), traffic_speed_cap);
+}
+
+Eigen::VectorXd strategy_features(const Scenario& s, const expert::GapFrame& frame,
+                                  double traffic_speed_cap) {
+  const VotedCars cars = voted_cars(s, frame);
+  const CarState& l = cars.leader;
+  const CarState& b = cars.behind;
+  const CarState& g = cars.ahead;
   Eigen::VectorXd f(static_cast<Eigen::Index>(strategy_feature_names().size()));
-  const CarState& l = s.leader();
-  const CarState& b = s.follower();
-  const CarState& g = s.target();
   f << s.ego.y, s.ego.theta, s.ego.v, s.ego.a, l.x - s.ego.x, l.v, l.a, b.x - s.ego.x, b.v, b.a,
-      g.x - s.ego.x, g.v, g.a, s.horizon, 0.0, 0.0, 0.0, gap_open_time(s, traffic_speed_cap);
+      g.x - s.ego.x, g.v, g.a, s.horizon, 0.0, 0.0, 0.0,
+      gap_open_time(s.ego, cars, traffic_speed_cap);
   f(14 + static_cast<Eigen::Index>(s.behavior)) = 1.0;
   return f;
+}
+
+Eigen::VectorXd strategy_features(const Scenario& s, double traffic_speed_cap) {
+  return strategy_features(s, paper_frame(s), traffic_speed_cap);
 }
 
 Strategy strategy_of(const std::vector<int>& lane_modes, int from) {

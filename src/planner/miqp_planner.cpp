@@ -106,6 +106,7 @@ std::string MiqpSession::replan(const Observation& o) {
     guess = shifted(*plan_, o.step - plan_step_, scene.steps, dt);
     modes = shifted(modes_, o.step - plan_step_, scene.steps);
     hints = {&guess, &modes, true};
+    hints.last_gap = &plan_gap_;
   }
   if (workspace_) {
     workspace_->advance(o.step - workspace_step_);

@@ -14,13 +14,6 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-// The lane strategies were learned for Eq. 1's gap: their modes are
-// replayed through it.
-Config with_paper_gap(Config config) {
-  config.expert.gap = GapChoice::Fixed;
-  return config;
-}
-
 double ms_since(Clock::time_point start) {
   return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
 }
@@ -90,7 +83,7 @@ StrategyQpPlanner::StrategyQpPlanner(Config config,
                                      std::shared_ptr<const learn::StrategyModel> model)
     : config_(closed_loop_expert(std::move(config))),
       model_(std::move(model)),
-      fixed_(with_paper_gap(config_), std::make_shared<expert::FixedModeLaneChangeSolver>()),
+      fixed_(config_, std::make_shared<expert::FixedModeLaneChangeSolver>()),
       screen_solver_(expert::FixedModeSettings{config_.strategy_qp.rough_screen,
                                                config_.strategy_qp.screen_tolerance}),
       neighbour_screen_solver_(expert::FixedModeSettings{
@@ -102,11 +95,14 @@ StrategyQpPlanner::StrategyQpPlanner(Config config,
 
 CandidateOutcome StrategyQpPlanner::solve_candidate(const Scenario& scene,
                                                     const std::vector<int>& modes,
+                                                    const expert::Gap& gap,
                                                     const expert::PlanLimits& limits,
                                                     const expert::PlanHints& hints,
                                                     expert::ExpertResult& result) const {
   const auto start = Clock::now();
-  result = fixed_.plan(scene, limits, {hints.path, &modes, hints.path_is_plan, hints.workspace});
+  expert::PlanHints through{hints.path, &modes, hints.path_is_plan, hints.workspace};
+  through.gap = &gap;
+  result = fixed_.plan(scene, limits, through);
   CandidateOutcome out;
   out.rounds = result.iterations();
   out.status = result.status;
@@ -138,7 +134,7 @@ class StrategyQpPlanner::StartTimer {
       prediction_ = predict_traffic(scene_, *config_,
                                     scene_.steps + config_->expert.prediction_lead_steps, dt);
     }
-    c.start = expert::warm_start_for_modes(scene_, *config_, *prediction_, c.modes);
+    c.start = expert::warm_start_for_modes(scene_, *config_, *prediction_, c.modes, c.gap);
   }
 
  private:
@@ -149,21 +145,21 @@ class StrategyQpPlanner::StartTimer {
 
 bool StrategyQpPlanner::can_hold(const Scenario& scene, const expert::PlanHints& hints,
                                  Candidate& c, Linearization& shared) const {
+  expert::PlanHints at{c.start.states.empty() ? hints.path : &c.start};
+  at.gap = &c.gap;
   if (c.start.states.empty()) {
-    if (!shared) {
-      shared = std::make_shared<const expert::LinearizedRound>(
-          fixed_.first_round(scene, {hints.path, nullptr}));
-    }
+    if (!shared)
+      shared = std::make_shared<const expert::LinearizedRound>(fixed_.first_round(scene, at));
     c.first = shared;
   } else {
-    c.first = std::make_shared<const expert::LinearizedRound>(
-        fixed_.first_round(scene, {&c.start, nullptr}));
+    c.first = std::make_shared<const expert::LinearizedRound>(fixed_.first_round(scene, at));
   }
   return expert::lane_modes_can_hold(c.first->qp, c.modes);
 }
 
 std::vector<StrategyQpPlanner::Candidate> StrategyQpPlanner::candidates_of(
-    const Scenario& scene, const expert::PlanHints& hints) const {
+    const Scenario& scene, const expert::PlanHints& hints, const expert::Gap& gap,
+    bool first_gap) const {
   const LaneRule rule = effective_config(config_, scene).expert.lane_rule;
   std::vector<Candidate> list;
   StartTimer starts(config_, scene, hints);
@@ -171,19 +167,19 @@ std::vector<StrategyQpPlanner::Candidate> StrategyQpPlanner::candidates_of(
   // step ago, and keep the manoeuvre steady.
   const auto nodes = static_cast<std::size_t>(scene.steps) + 1;
   if (hints.modes != nullptr && hints.modes->size() == nodes) {
-    list.push_back({{}, *hints.modes, {}, {}});
+    list.push_back({{}, *hints.modes, {}, {}, gap});
     starts.time(list.back());
   }
   // With the last plan's modes to go on, the votes are alternatives to them
   // and the plain top k serve; without (open loop, a rollout's first step),
   // every slot a refused vote takes is a step closer to the exact search.
-  const int wanted =
-      list.empty() ? config_.strategy_qp.candidates : config_.strategy_qp.replan_candidates;
+  const int wanted = list.empty() && first_gap ? config_.strategy_qp.candidates
+                                               : config_.strategy_qp.replan_candidates;
   const int pool = list.empty() ? std::max(wanted, config_.strategy_qp.vote_pool) : wanted;
   std::vector<Candidate> votes;
-  for (learn::Strategy& s : model_->predict(scene, pool)) {
+  for (learn::Strategy& s : model_->predict(scene, expert::frame_of(gap), pool)) {
     std::vector<int> modes = modes_of_strategy(s, scene.steps, rule);
-    votes.push_back({std::move(s), std::move(modes), {}, {}});
+    votes.push_back({std::move(s), std::move(modes), {}, {}, gap});
   }
   Linearization shared;
   int taken = 0;
@@ -224,7 +220,7 @@ void StrategyQpPlanner::follow_in_order(const Scenario& scene, const expert::Pla
   expert::ExpertResult plan;
   for (const Candidate& c : list) {
     CandidateOutcome o =
-        solve_candidate(scene, c.modes, left_of(limits, start, out.qp_iterations),
+        solve_candidate(scene, c.modes, c.gap, left_of(limits, start, out.qp_iterations),
                         {c.first_point(hints), hints.modes, c.starts_from_plan(hints)}, plan);
     o.strategy = c.strategy;
     const bool taken = take_candidate(o, c.modes, plan, out, rescued_hint);
@@ -247,17 +243,20 @@ void StrategyQpPlanner::follow_screened(const Scenario& scene, const expert::Pla
   double best_screen = expert::kInfinity;
   expert::ExpertResult plan;
   int held = 0;
+  // out.candidates may hold an earlier gap's: list[j] and screens[j] are
+  // out.candidates[first_index + j].
+  const std::size_t first_index = out.candidates.size();
   // Closed loop: the last plan's modes, from its own path, mostly converge in
   // one round. Their rounds run first and the votes are screened against that
   // plan's cost, which saves the last modes' screen QP.
   const bool last_plan_first = !list.empty() && list.front().strategy.empty() &&
                                list.front().starts_from_plan(hints) && hints.path != nullptr;
   if (last_plan_first) {
-    CandidateOutcome o =
-        solve_candidate(scene, list.front().modes, left_of(limits, start, out.qp_iterations),
-                        {hints.path, nullptr, true, hints.workspace}, plan);
+    CandidateOutcome o = solve_candidate(scene, list.front().modes, list.front().gap,
+                                         left_of(limits, start, out.qp_iterations),
+                                         {hints.path, nullptr, true, hints.workspace}, plan);
     if (take_candidate(o, list.front().modes, plan, out, rescued_hint)) {
-      out.chosen = 0;
+      out.chosen = static_cast<int>(first_index);
       held = 1;
       best_screen = out.result.objective;
     }
@@ -297,25 +296,26 @@ void StrategyQpPlanner::follow_screened(const Scenario& scene, const expert::Pla
         out.candidates[i].screen_objective >= out.result.objective) {
       continue;
     }
+    const std::size_t j = i - first_index;
     // The rounds go on from the screened solution: it is the first round's.
     // A candidate cut off in the screen has none, and starts where its
     // screen did.
-    const bool screened = screens[i].has_solution();
+    const bool screened = screens[j].has_solution();
     // The rounds solve in the screen's workspace: it carries the state
     // bounds the screens found binding, and a fresh one would solve the
     // first round twice to find them again. (A session's own workspace stays
     // with the last plan's modes, for the next step's warm start.)
-    const expert::PlanHints from_screen{screened ? &screens[i].path : list[i].first_point(hints),
-                                        nullptr, screened || list[i].starts_from_plan(hints),
+    const expert::PlanHints from_screen{screened ? &screens[j].path : list[j].first_point(hints),
+                                        nullptr, screened || list[j].starts_from_plan(hints),
                                         workspace.get()};
     CandidateOutcome& o = out.candidates[i];
     const std::string strategy = o.strategy;
     const double screen_objective = o.screen_objective;
-    o = solve_candidate(scene, list[i].modes, left_of(limits, start, out.qp_iterations),
-                        from_screen, plan);
+    o = solve_candidate(scene, list[j].modes, list[j].gap,
+                        left_of(limits, start, out.qp_iterations), from_screen, plan);
     o.strategy = strategy;
     o.screen_objective = screen_objective;
-    if (take_candidate(o, list[i].modes, plan, out, rescued_hint)) out.chosen = static_cast<int>(i);
+    if (take_candidate(o, list[j].modes, plan, out, rescued_hint)) out.chosen = static_cast<int>(i);
     held += o.feasible() && !o.rescued ? 1 : 0;
     if (held >= config_.strategy_qp.screen_keep) return;
   }
@@ -338,7 +338,9 @@ expert::LaneChangeSolution StrategyQpPlanner::screen_one(const Scenario& scene,
   // Candidates with a start of their own each have their linearization;
   // the others share the plan's.
   if (first.point.states.empty() || !c.start.states.empty()) {
-    first = fixed_.first_round(scene, {c.first_point(hints), nullptr});
+    expert::PlanHints at{c.first_point(hints)};
+    at.gap = &c.gap;
+    first = fixed_.first_round(scene, at);
   }
   return screener.solver.solve(first.qp, settings,
                                {screener.workspace, &c.modes, &first.point.controls});
@@ -359,7 +361,7 @@ void StrategyQpPlanner::search_neighbours(const Scenario& scene, const expert::P
     std::vector<int> modes = modes_of_strategy(s, scene.steps, rule);
     if (std::find(tried.begin(), tried.end(), modes) != tried.end()) continue;
     tried.push_back(modes);
-    list.push_back({std::move(s), std::move(modes), {}, {}});
+    list.push_back({std::move(s), std::move(modes), {}, {}, out.result.gap});
   }
   // Every neighbour is screened at the plan's own linearization: a fixed
   // point of its rounds, and close to the neighbours' own.
@@ -380,7 +382,7 @@ void StrategyQpPlanner::search_neighbours(const Scenario& scene, const expert::P
         screen.status == expert::MiqpStatus::Optimal || screen.status == expert::MiqpStatus::Cutoff;
     if (!has_point) o.status = expert::PlanStatus::Infeasible;
     if (screen.status == expert::MiqpStatus::Optimal && screen.objective < out.result.objective) {
-      o = solve_candidate(scene, c.modes, left_of(limits, start, out.qp_iterations),
+      o = solve_candidate(scene, c.modes, c.gap, left_of(limits, start, out.qp_iterations),
                           {&screen.path, nullptr, true}, plan);
       if (take_candidate(o, c.modes, plan, out, unused_hint)) {
         out.chosen = static_cast<int>(out.candidates.size());
@@ -392,35 +394,78 @@ void StrategyQpPlanner::search_neighbours(const Scenario& scene, const expert::P
   }
 }
 
+std::vector<expert::Gap> StrategyQpPlanner::gaps_to_try(const Scenario& scene,
+                                                        const expert::PlanHints& hints) const {
+  if (effective_config(config_, scene).expert.gap == GapChoice::Fixed) {
+    return {expert::paper_gap(scene)};
+  }
+  std::vector<expert::Gap> lane = expert::target_lane_gaps(scene, GapChoice::Best);
+  const auto framed_by = [&lane](const expert::GapFrame& frame) {
+    return std::find_if(lane.begin(), lane.end(),
+                        [&frame](const expert::Gap& g) { return expert::frame_of(g) == frame; });
+  };
+  const expert::GapSlots slots = expert::gap_slots(scene);
+  auto first = lane.end();
+  if (hints.last_gap != nullptr) first = framed_by(*hints.last_gap);
+  const expert::GapFrame paper = learn::paper_frame(scene);
+  if (first == lane.end() && (paper.behind || paper.ahead)) first = framed_by(paper);
+  const auto& beside = slots.gaps[expert::kGapSlotBeside];
+  if (first == lane.end() && beside) first = framed_by(expert::frame_of(*beside));
+  if (first == lane.end()) return {};
+  std::vector<expert::Gap> out{*first};
+  // The others within the slots, the soonest open first (then the nearest slot).
+  const double cap = config_.traffic_max_speed.value_or(expert::kInfinity);
+  std::vector<std::pair<std::pair<double, int>, expert::Gap>> others;
+  for (int slot = 0; slot < expert::kGapSlots; ++slot) {
+    const auto& g = slots.gaps[static_cast<std::size_t>(slot)];
+    if (!g || expert::frame_of(*g) == expert::frame_of(out.front())) continue;
+    const auto in_lane = framed_by(expert::frame_of(*g));
+    if (in_lane == lane.end()) continue;
+    others.push_back({{learn::gap_open_time(scene, expert::frame_of(*g), cap),
+                       std::abs(slot - expert::kGapSlotBeside)},
+                      *in_lane});
+  }
+  std::stable_sort(others.begin(), others.end(),
+                   [](const auto& a, const auto& b) { return a.first < b.first; });
+  const auto wanted = static_cast<std::size_t>(config_.strategy_qp.other_gaps);
+  for (std::size_t i = 0; i < others.size() && i < wanted; ++i) out.push_back(others[i].second);
+  return out;
+}
+
+void StrategyQpPlanner::follow_gap(const Scenario& scene, const expert::PlanLimits& limits,
+                                   const expert::PlanHints& hints, const expert::Gap& gap,
+                                   bool first_gap, StrategyPlan& out,
+                                   std::vector<int>& rescued_hint) const {
+  const std::vector<Candidate> list = candidates_of(scene, hints, gap, first_gap);
+  if (config_.strategy_qp.screen) {
+    follow_screened(scene, limits, hints, list, out, rescued_hint);
+  } else {
+    follow_in_order(scene, limits, hints, list, config_.strategy_qp.first_feasible, out,
+                    rescued_hint);
+  }
+  if (rescued_hint.empty() && !list.empty()) rescued_hint = list.front().modes;
+}
+
 StrategyPlan StrategyQpPlanner::plan(const Scenario& scene, const expert::PlanLimits& limits,
                                      const expert::PlanHints& hints) const {
   const auto start = Clock::now();
   StrategyPlan out;
-  // The strategies are learned on the paper's three cars; a scene without
-  // one of them is the exact search's alone.
-  if (!scene.has_every_role()) {
-    out.result = exact_.plan(scene, limits, {hints.path, nullptr, hints.path_is_plan});
-    out.qp_iterations += qp_iterations_of(out.result);
-    out.total_ms = ms_since(start);
-    out.result.total_ms = out.total_ms;
-    return out;
-  }
-  const std::vector<Candidate> list = candidates_of(scene, hints);
+  const std::vector<expert::Gap> gaps = gaps_to_try(scene, hints);
   out.predict_ms = ms_since(start);
   std::vector<int> rescued_hint;
-  // Each stage takes the time the ones before left (its iterations it reads
-  // off out.qp_iterations).
-  if (config_.strategy_qp.screen) {
-    follow_screened(scene, left_of(limits, start, 0), hints, list, out, rescued_hint);
+  // Each gap and stage takes the time the ones before left (its iterations
+  // it reads off out.qp_iterations). The last plan's path and modes belong
+  // to the first gap; the others start from their own warm starts.
+  for (std::size_t i = 0; i < gaps.size() && out.chosen < 0; ++i) {
+    const expert::PlanHints from = i == 0 ? hints : expert::PlanHints{};
+    follow_gap(scene, left_of(limits, start, 0), from, gaps[i], i == 0, out, rescued_hint);
+  }
+  if (out.chosen >= 0 && config_.strategy_qp.screen) {
     search_neighbours(scene, left_of(limits, start, 0), out);
-  } else {
-    follow_in_order(scene, left_of(limits, start, 0), hints, list,
-                    config_.strategy_qp.first_feasible, out, rescued_hint);
   }
   if (out.chosen < 0) {
-    // No candidate holds: the exact search, started from the likeliest modes.
-    if (rescued_hint.empty() && !list.empty()) rescued_hint = list.front().modes;
-    // Only what the candidates left of the limit: a step budget is one budget.
+    // No candidate holds: the exact search, started from the likeliest modes
+    // (only what the candidates left of the limit: a step budget is one budget).
     out.result = exact_.plan(
         scene, left_of(limits, start, out.qp_iterations),
         {hints.path, rescued_hint.empty() ? nullptr : &rescued_hint, hints.path_is_plan});
@@ -434,11 +479,16 @@ StrategyPlan StrategyQpPlanner::plan(const Scenario& scene, const expert::PlanLi
 CandidateOutcome StrategyQpPlanner::assess_strategy(const Scenario& scene,
                                                     const learn::Strategy& strategy) const {
   const LaneRule rule = effective_config(config_, scene).expert.lane_rule;
-  std::vector<Candidate> one{{strategy, modes_of_strategy(strategy, scene.steps, rule), {}, {}}};
+  const std::vector<expert::Gap> gaps = gaps_to_try(scene, {});
+  std::vector<Candidate> one{{strategy,
+                              modes_of_strategy(strategy, scene.steps, rule),
+                              {},
+                              {},
+                              gaps.empty() ? expert::paper_gap(scene) : gaps.front()}};
   StartTimer(config_, scene, {}).time(one.front());
   expert::ExpertResult plan;
-  CandidateOutcome o =
-      solve_candidate(scene, one.front().modes, {}, {one.front().first_point({}), nullptr}, plan);
+  CandidateOutcome o = solve_candidate(scene, one.front().modes, one.front().gap, {},
+                                       {one.front().first_point({}), nullptr}, plan);
   o.strategy = strategy;
   o.rounds_run = true;
   return o;
@@ -449,7 +499,10 @@ std::vector<CandidateOutcome> StrategyQpPlanner::assess(const Scenario& scene,
                                                         const expert::PlanHints& hints) const {
   StrategyPlan all;
   std::vector<int> unused;
-  follow_in_order(scene, limits, hints, candidates_of(scene, hints), false, all, unused);
+  const std::vector<expert::Gap> gaps = gaps_to_try(scene, hints);
+  if (gaps.empty()) return {};
+  follow_in_order(scene, limits, hints, candidates_of(scene, hints, gaps.front()), false, all,
+                  unused);
   return all.candidates;
 }
 

@@ -91,6 +91,7 @@ class StrategyQpPlanner final : public ClosedLoopPlanner {
     /// Its first round's linearization at first_point, when the vote pool's
     /// check made it (StrategyQpSettings::vote_pool): the screen reuses it.
     std::shared_ptr<const expert::LinearizedRound> first;
+    expert::Gap gap;  ///< the gap its modes drive into
     [[nodiscard]] const expert::Iterate* first_point(const expert::PlanHints& hints) const {
       return start.states.empty() ? hints.path : &start;
     }
@@ -108,11 +109,22 @@ class StrategyQpPlanner final : public ClosedLoopPlanner {
   /// one at a time on one traffic prediction: a vote pool ranks more
   /// strategies than the plan looks at (strategy_qp_planner.cpp).
   class StartTimer;
-  /// The predicted strategies (after the last plan's modes, in closed loop),
-  /// each once on this horizon, the first `candidates` of the vote pool that
-  /// can hold.
-  [[nodiscard]] std::vector<Candidate> candidates_of(const Scenario& scene,
+  /// The gaps whose strategies a plan tries, in order: the last plan's
+  /// (hints.last_gap), else Eq. 1's, else the one beside the ego; then up to
+  /// strategy_qp.other_gaps others around the ego, soonest open first.
+  [[nodiscard]] std::vector<expert::Gap> gaps_to_try(const Scenario& scene,
                                                      const expert::PlanHints& hints) const;
+  /// The predicted strategies into `gap` (after the last plan's modes, in
+  /// closed loop), each once on this horizon, the first `candidates` of the
+  /// vote pool that can hold (`replan_candidates` for a gap after the first).
+  [[nodiscard]] std::vector<Candidate> candidates_of(const Scenario& scene,
+                                                     const expert::PlanHints& hints,
+                                                     const expert::Gap& gap,
+                                                     bool first_gap = true) const;
+  /// The candidates of `gaps[i]`, screened or in order as configured.
+  void follow_gap(const Scenario& scene, const expert::PlanLimits& limits,
+                  const expert::PlanHints& hints, const expert::Gap& gap, bool first_gap,
+                  StrategyPlan& out, std::vector<int>& rescued_hint) const;
   /// Runs the candidates' rounds in the list's order; follows the cheapest,
   /// or the first that holds when `stop_at_first`.
   void follow_in_order(const Scenario& scene, const expert::PlanLimits& limits,
@@ -146,6 +158,7 @@ class StrategyQpPlanner final : public ClosedLoopPlanner {
                       std::vector<int>& rescued_hint) const;
   [[nodiscard]] CandidateOutcome solve_candidate(const Scenario& scene,
                                                  const std::vector<int>& modes,
+                                                 const expert::Gap& gap,
                                                  const expert::PlanLimits& limits,
                                                  const expert::PlanHints& hints,
                                                  expert::ExpertResult& result) const;

@@ -251,22 +251,10 @@ TEST(Generate, MismatchedParametersAreRefusedAndNothingChanges) {
   EXPECT_EQ(testing::all_files(dir.path()), before);
 }
 
-// The follower and target too close together to take the ego between them,
-// both slower than it: only the gap ahead of the target is open.
-Scenario only_the_gap_ahead_of_the_target() {
-  Scenario s = testing::open_road_scenario();
-  s.ego.v = 10.0;
-  s.leader() = {40.0, 10.0, 0.0};
-  s.follower() = {-24.0, 8.0, 0.0};
-  s.target() = {-10.0, 8.0, 0.0};
-  validate_scenario(s);
-  return s;
-}
-
 // The data set names the only open gap and labels every gap around the ego
 // on its own.
 TEST(Generate, GapLabelsNameTheOnlyOpenGap) {
-  const Scenario s = only_the_gap_ahead_of_the_target();
+  const Scenario s = testing::only_the_gap_ahead_of_the_target();
   const expert::ExpertPlanner planner(Config{}, std::make_shared<expert::FastLaneChangeSolver>());
   data::PlanOutcome outcome = data::plan_outcome(planner, s, 60.0);
   ASSERT_EQ(outcome.label, Label::WellPosed) << outcome.reason;
@@ -300,7 +288,7 @@ TEST(Generate, GapLabelsNameTheOnlyOpenGap) {
 // Each sample sees the plan's own gap from where the ego is at its node:
 // the car behind it by the prediction, the open side far ahead, the leader.
 TEST(Generate, SamplesSeeThePlansGapFromTheEgo) {
-  const Scenario s = only_the_gap_ahead_of_the_target();
+  const Scenario s = testing::only_the_gap_ahead_of_the_target();
   const expert::ExpertPlanner planner(Config{}, std::make_shared<expert::FastLaneChangeSolver>());
   const data::PlanOutcome outcome = data::plan_outcome(planner, s, 60.0);
   ASSERT_EQ(outcome.label, Label::WellPosed) << outcome.reason;

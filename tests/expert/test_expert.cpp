@@ -802,15 +802,10 @@ void expect_only_the_gap(const Scenario& s, const Gap& expected) {
   EXPECT_EQ(fixed.to_trajectory(paper, s).label, Label::Failure);
 }
 
-// The follower and target too close together to take the ego between them,
-// and both slower than the ego: only the gap ahead of the target is open.
+// Only the gap ahead of the target is open (testing::only_the_gap_ahead_of_the_target).
 TEST(Planner, TakesTheOnlyOpenGapAheadOfTheTarget) {
-  Scenario s = open_road_scenario();
-  s.ego.v = 10.0;
-  s.leader() = {40.0, 10.0, 0.0};
-  s.follower() = {-24.0, 8.0, 0.0};  // at Krauss's safe gap: neither brakes
-  s.target() = {-10.0, 8.0, 0.0};
-  validate_scenario(s);
+  // The follower at Krauss's safe gap behind the target: neither brakes.
+  const Scenario s = testing::only_the_gap_ahead_of_the_target();
   expect_only_the_gap(s, {{car_of(Role::Follower), car_of(Role::Target)}, {}});
 }
 

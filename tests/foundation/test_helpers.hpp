@@ -230,4 +230,16 @@ inline Scenario no_gap_scenario() {
   return s;
 }
 
+// The follower and target too close together to take the ego between them,
+// both slower than it: only the gap ahead of the target is open.
+inline Scenario only_the_gap_ahead_of_the_target() {
+  Scenario s = open_road_scenario();
+  s.ego.v = 10.0;
+  s.leader() = {40.0, 10.0, 0.0};
+  s.follower() = {-24.0, 8.0, 0.0};
+  s.target() = {-10.0, 8.0, 0.0};
+  validate_scenario(s);
+  return s;
+}
+
 }  // namespace lanechange::testing

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Core>
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <memory>
@@ -12,6 +13,7 @@
 #include "lanechange/error.hpp"
 #include "lanechange/expert/planner.hpp"
 #include "lanechange/expert/structured_qp.hpp"
+#include "lanechange/learn/learn_data.hpp"
 #include "lanechange/learn/strategy.hpp"
 #include "lanechange/sampler.hpp"
 #include "lanechange/sim/simulator.hpp"
@@ -444,6 +446,7 @@ TEST(Strategy, AVoteTheReachableStatesRuleOutTakesNoPlace) {
   const auto model = model_of({s, farther}, {"2", truth});
   ASSERT_EQ(model->predict(s, 2).front(), "2");
   config.strategy_qp.candidates = 1;
+  config.strategy_qp.other_gaps = 0;  // the pool's effect in one gap
   const expert::ExpertPlanner fixed(config, std::make_shared<expert::FixedModeLaneChangeSolver>());
   const expert::LinearizedRound first = fixed.first_round(s);
   EXPECT_FALSE(expert::lane_modes_can_hold(
@@ -750,6 +753,98 @@ TEST(Strategy, TheStudyOnMemorisedScenesFollowsTheirOwnStrategies) {
                     scene["behavior"].get<std::string>() + " | " + switches + " |"),
             std::string::npos)
       << md;
+}
+
+// Only the gap ahead of the target is open. A model that has seen the exact
+// plan into that gap votes for it in that gap's frame.
+TEST(Strategy, AStrategyIntoAnotherGapIsFollowedWhereEquationOnesIsClosed) {
+  Config config = testing::untimed_config();
+  const Scenario s = testing::only_the_gap_ahead_of_the_target();
+  const auto [exact, truth] = exact_plan_of(s, config);
+  ASSERT_EQ(exact.status, PlanStatus::Converged) << exact.reason;
+  const expert::GapFrame ahead_of_target = expert::frame_of(exact.gap);
+  ASSERT_EQ(ahead_of_target.behind, s.roles[static_cast<std::size_t>(Role::Target)]);
+  ASSERT_FALSE(ahead_of_target.ahead.has_value());
+  learn::StrategyRows rows;
+  rows.features.push_back(learn::strategy_features(s, ahead_of_target, default_cap()));
+  rows.labels = {truth};
+  rows.traffic_speed_cap = default_cap();
+  const auto model =
+      std::make_shared<const learn::StrategyModel>(learn::StrategyModel::fit(rows, {3, 0}));
+
+  const planner::StrategyPlan plan = planner::StrategyQpPlanner(config, model).plan(s);
+  ASSERT_GE(plan.chosen, 0) << "the exact search planned it";
+  EXPECT_EQ(expert::frame_of(plan.result.gap), ahead_of_target);
+  EXPECT_NEAR(plan.result.objective, exact.objective, 0.01 * exact.objective);
+  // With Eq. 1's gap alone the strategies cannot hold and the exact search plans.
+  config.strategy_qp.other_gaps = 0;
+  const planner::StrategyPlan one_gap = planner::StrategyQpPlanner(config, model).plan(s);
+  EXPECT_EQ(one_gap.chosen, -1);
+  EXPECT_EQ(expert::frame_of(one_gap.result.gap), ahead_of_target);
+  config.strategy_qp.other_gaps = -1;
+  expect_refused(config, "other_gaps");
+}
+
+// A plan of three nodes: the ego at x = 10 with the follower 5 m behind it
+// and the target 20 m ahead, as the role columns have them; the gap view
+// (format 4) says the plan's gap is another one, 30 m behind to 12 m ahead.
+learn::LearningData three_node_plan(bool with_gap_view) {
+  learn::LearningData data;
+  to_json(data.config, Config{});
+  data.scenarios.label = {0};
+  data.scenarios.behavior = {0};
+  data.scenarios.dataset = {0};
+  data.scenarios.index = {0};
+  const auto& names = learn::PlanNodeTable::columns();
+  learn::PlanNodeTable& t = data.plan_nodes;
+  t.states = Eigen::MatrixXd::Zero(3, static_cast<Eigen::Index>(names.size()));
+  const auto set = [&](const char* column, double value) {
+    const auto at = std::find(names.begin(), names.end(), column) - names.begin();
+    t.states.col(at).setConstant(value);
+  };
+  set("x", 10.0);
+  set("v", 20.0);
+  set("leader_x", 60.0);
+  set("follower_x", 5.0);
+  set("target_x", 30.0);
+  for (int k = 0; k < 3; ++k) t.states(k, 0) = 0.1 * k;  // t
+  t.lane_mode = {-1, 1, 2};
+  t.node = {0, 1, 2};
+  t.scenario = {0, 0, 0};
+  if (with_gap_view) {
+    t.gap_view = Eigen::MatrixXd::Zero(3, static_cast<Eigen::Index>(expert::kGapViewSize));
+    t.gap_view.col(0).setConstant(-30.0);  // gap_behind_dx
+    t.gap_view.col(3).setConstant(12.0);   // gap_ahead_dx
+    t.gap_view.col(6).setConstant(50.0);   // leader_dx
+  }
+  return data;
+}
+
+TEST(Strategy, RowsOfADataSetWithTheGapViewSeeThePlansOwnGap) {
+  const learn::StrategyRows roles = learn::strategy_rows(three_node_plan(false), {0}, 0);
+  ASSERT_EQ(roles.features.size(), 1U);
+  EXPECT_DOUBLE_EQ(roles.features[0](7), -5.0);   // follower_dx
+  EXPECT_DOUBLE_EQ(roles.features[0](10), 20.0);  // target_dx
+  const learn::StrategyRows own = learn::strategy_rows(three_node_plan(true), {0}, 0);
+  ASSERT_EQ(own.features.size(), 1U);
+  EXPECT_DOUBLE_EQ(own.features[0](7), -30.0);
+  EXPECT_DOUBLE_EQ(own.features[0](10), 12.0);
+  EXPECT_DOUBLE_EQ(own.features[0](4), 50.0);  // leader_dx
+  EXPECT_EQ(own.labels, roles.labels);
+}
+
+// Eq. 1's frame is the follower and target: the features of the paper's
+// scenes stay what they were, and another gap's cars take those places.
+TEST(Strategy, FeaturesOfAGapPutItsCarsInTheFollowersAndTargetsPlaces) {
+  const Scenario s = testing::open_road_scenario();
+  const double cap = default_cap();
+  EXPECT_EQ(learn::strategy_features(s, cap),
+            learn::strategy_features(s, learn::paper_frame(s), cap));
+  const auto target = s.roles[static_cast<std::size_t>(Role::Target)];
+  const Eigen::VectorXd ahead = learn::strategy_features(s, {target, std::nullopt}, cap);
+  EXPECT_DOUBLE_EQ(ahead(7), s.target().x - s.ego.x);     // follower_dx: the target
+  EXPECT_DOUBLE_EQ(ahead(10), expert::kOpenGapDistance);  // target_dx: open ahead
+  EXPECT_DOUBLE_EQ(ahead(11), s.ego.v);
 }
 
 TEST(Strategy, ClosedLoopChangesLanesIntoAWideOpenGap) {

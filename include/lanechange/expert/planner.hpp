@@ -16,6 +16,7 @@
 
 #include "lanechange/config.hpp"
 #include "lanechange/expert/formulation.hpp"
+#include "lanechange/expert/gap_slots.hpp"
 #include "lanechange/expert/lane_change_solver.hpp"
 #include "lanechange/expert/miqp.hpp"
 #include "lanechange/scenario.hpp"
@@ -107,6 +108,10 @@ struct PlanHints {
   /// Plan through this gap alone, whatever config.expert.gap allows: a
   /// replay of a plan's own modes, which belong to its gap.
   const Gap* gap = nullptr;
+  /// The gap `path` and `modes` drive into (a re-plan's last plan's): a
+  /// planner that replays the modes replays them into it. The exact search
+  /// tries every allowed gap and needs none.
+  const GapFrame* last_gap = nullptr;
 };
 
 /// The cars as a round linearized about `point` sees them: predicted along
@@ -131,6 +136,10 @@ struct PlanHints {
 /// near where they end, not from a change timed to the middle of the horizon.
 [[nodiscard]] Iterate warm_start_for_modes(const Scenario& scenario, const Config& config,
                                            const TrafficPrediction& prediction,
+                                           const std::vector<int>& modes, const Gap& gap);
+/// The same aimed into Eq. 1's gap (paper_gap).
+[[nodiscard]] Iterate warm_start_for_modes(const Scenario& scenario, const Config& config,
+                                           const TrafficPrediction& prediction,
                                            const std::vector<int>& modes);
 
 /// A round's MIQP and the point it is linearized about.
@@ -149,8 +158,9 @@ class ExpertPlanner {
 
   /// The MIQP of `plan`'s first round, for the same scenario and hints: the
   /// dynamics linearized about the hint's path (else the warm start), the
-  /// cars predicted along it. Every lane-mode sequence of that round shares
-  /// it, so strategy-qp ranks its candidates with one QP each on it.
+  /// cars predicted along it, the target lane's rows those of the hint's gap
+  /// (else Eq. 1's). Every lane-mode sequence of that round shares it, so
+  /// strategy-qp ranks its candidates with one QP each on it.
   [[nodiscard]] LinearizedRound first_round(const Scenario& scenario,
                                             const PlanHints& hints = {}) const;
 

@@ -70,7 +70,10 @@ struct SampleTable {
 struct PlanNodeTable {
   /// The columns of `states`, by their data-set names.
   static const std::vector<std::string>& columns();
-  Eigen::MatrixXd states;      ///< rows x columns()
+  Eigen::MatrixXd states;  ///< rows x columns()
+  /// rows x expert::gap_view_names(): the plan's own gap seen from the ego at
+  /// the node; no rows where the data sets predate it (formats 2 and 3).
+  Eigen::MatrixXd gap_view;
   std::vector<int> lane_mode;  ///< LaneOccupancy's value; -1 at k = 0
   std::vector<int> node;       ///< k
   std::vector<int> scenario;   ///< row of ScenarioTable the node belongs to

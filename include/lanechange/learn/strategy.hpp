@@ -14,6 +14,7 @@
 #include <utility>
 #include <vector>
 
+#include "lanechange/expert/gap_slots.hpp"
 #include "lanechange/learn/classifier.hpp"
 #include "lanechange/scenario.hpp"
 
@@ -44,6 +45,17 @@ struct StrategySettings {
 /// `traffic_speed_cap` (m/s, +infinity for none) is the traffic model's
 /// (Config::traffic_max_speed), for gap_open_time().
 [[nodiscard]] Eigen::VectorXd strategy_features(const Scenario& scene, double traffic_speed_cap);
+/// The same for a lane change into `frame`'s gap, in a scene of any number of
+/// cars: the gap's two framing cars stand in the follower's and the target's
+/// places, the leader is the leader's role (else the nearest ego-lane car
+/// ahead), and a side without a car reads kOpenGapDistance away at the ego's
+/// speed, as the gap features read it. The form above is this one with
+/// paper_frame(scene).
+[[nodiscard]] Eigen::VectorXd strategy_features(const Scenario& scene,
+                                                const expert::GapFrame& frame,
+                                                double traffic_speed_cap);
+/// Eq. 1's gap: the scene's follower and target.
+[[nodiscard]] expert::GapFrame paper_frame(const Scenario& scene);
 
 /// The first time (s, on a 0.1 s grid, at most 10) at which an ego that keeps
 /// its speed would be at the centre safe distances behind the target car and
@@ -54,6 +66,9 @@ struct StrategySettings {
 /// where no top-k strategy held changed lanes late, while the neighbours
 /// changed early (docs/strategy.md).
 [[nodiscard]] double gap_open_time(const Scenario& scene, double traffic_speed_cap);
+/// The same for `frame`'s gap (its two cars in the target's and follower's places).
+[[nodiscard]] double gap_open_time(const Scenario& scene, const expert::GapFrame& frame,
+                                   double traffic_speed_cap);
 
 /// Training rows: scenes and the strategy their plan follows from there.
 struct StrategyRows {
@@ -87,6 +102,11 @@ class StrategyModel {
                                                       int count) const;
   [[nodiscard]] std::vector<Strategy> predict(const Scenario& scene, int count) const {
     return predict(strategy_features(scene, traffic_speed_cap_).head(points_.rows()), count);
+  }
+  /// The vote for a lane change into `frame`'s gap.
+  [[nodiscard]] std::vector<Strategy> predict(const Scenario& scene, const expert::GapFrame& frame,
+                                              int count) const {
+    return predict(strategy_features(scene, frame, traffic_speed_cap_).head(points_.rows()), count);
   }
   [[nodiscard]] std::vector<Strategy> predict_by_scan(const Scenario& scene, int count) const {
     return predict_by_scan(strategy_features(scene, traffic_speed_cap_).head(points_.rows()),
