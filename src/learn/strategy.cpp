@@ -167,10 +167,6 @@ constexpr Eigen::Index kBehaviorFeatures = 3;
 // order of summation; the slack covers a compiler that fuses or reorders it.
 constexpr double kBoundSlack = 1e-5;
 
-}  // namespace
-
-namespace {
-
 // A side of a gap without a car: as the gap features read it, a car
 // kOpenGapDistance away at the ego's speed.
 CarState open_side(const EgoState& ego, double side) {
