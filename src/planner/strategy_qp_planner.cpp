@@ -287,7 +287,7 @@ void StrategyQpPlanner::follow_screened(const Scenario& scene, const expert::Pla
     }
     out.candidates.push_back(std::move(o));
   }
-  out.screen_ms = ms_since(start);
+  out.screen_ms += ms_since(start);
   std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
     return out.candidates[a].screen_objective < out.candidates[b].screen_objective;
   });
@@ -419,11 +419,10 @@ std::vector<expert::Gap> StrategyQpPlanner::gaps_to_try(const Scenario& scene,
   for (int slot = 0; slot < expert::kGapSlots; ++slot) {
     const auto& g = slots.gaps[static_cast<std::size_t>(slot)];
     if (!g || expert::frame_of(*g) == expert::frame_of(out.front())) continue;
-    const auto in_lane = framed_by(expert::frame_of(*g));
-    if (in_lane == lane.end()) continue;
+    // A slot's gap is one of `lane`'s (gap_slots picks them from it).
     others.push_back({{learn::gap_open_time(scene, expert::frame_of(*g), cap),
                        std::abs(slot - expert::kGapSlotBeside)},
-                      *in_lane});
+                      *g});
   }
   std::stable_sort(others.begin(), others.end(),
                    [](const auto& a, const auto& b) { return a.first < b.first; });
@@ -436,7 +435,9 @@ void StrategyQpPlanner::follow_gap(const Scenario& scene, const expert::PlanLimi
                                    const expert::PlanHints& hints, const expert::Gap& gap,
                                    bool first_gap, StrategyPlan& out,
                                    std::vector<int>& rescued_hint) const {
+  const auto start = Clock::now();
   const std::vector<Candidate> list = candidates_of(scene, hints, gap, first_gap);
+  out.predict_ms += ms_since(start);
   if (config_.strategy_qp.screen) {
     follow_screened(scene, limits, hints, list, out, rescued_hint);
   } else {

@@ -38,8 +38,8 @@ struct StrategyPlan {
   expert::ExpertResult result;  ///< the plan followed (the exact one when no candidate was)
   std::vector<CandidateOutcome> candidates;  ///< in the model's order
   int chosen = -1;                           ///< index into candidates; -1: the exact search
-  double predict_ms = 0.0;
-  double screen_ms = 0.0;  ///< the first round's QPs of every candidate
+  double predict_ms = 0.0;  ///< ordering the gaps and every gap's vote with its candidates' set-up
+  double screen_ms = 0.0;   ///< the first round's QPs of every candidate, over every gap tried
   /// Interior-point iterations over every QP the plan solved (screen, rounds,
   /// the exact search's): with the time per iteration, where the time goes.
   long qp_iterations = 0;
