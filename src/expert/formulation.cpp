@@ -72,7 +72,8 @@ HalfSpace row(double gx, double gy, double gv, double upper, double gtheta = 0.0
 // ego lane, behind every car ahead of the ego at t = 0 and ahead of every car
 // behind it (the lane keeps its order); in the target lane, those of the gap.
 struct CarRows {
-  std::vector<HalfSpace> ego_lane, target_lane;
+  std::vector<HalfSpace>& ego_lane;
+  std::vector<HalfSpace>& target_lane;
 };
 
 // x_ego + h v_ego <= x_car - d: behind the car, by its distance at the ego's speed.
@@ -130,9 +131,10 @@ HalfSpace restoring(const Scenario& s, const NodeContext& node, bool ego_in_lane
   return h;
 }
 
-CarRows car_rows(const Scenario& s, const Config& config, const TrafficPrediction& p,
-                 const NodeContext& node, const Gap& gap) {
-  CarRows r;
+void fill_car_rows(const Scenario& s, const Config& config, const TrafficPrediction& p,
+                   const NodeContext& node, const Gap& gap, CarRows r) {
+  r.ego_lane.clear();
+  r.target_lane.clear();
   for (CarIndex c = 0; c < s.car_count(); ++c) {
     if (s.cars[c].lane != Lane::Ego) continue;
     const CarTrack& car = p.car(c);
@@ -165,19 +167,6 @@ CarRows car_rows(const Scenario& s, const Config& config, const TrafficPredictio
     r.target_lane.push_back(restoring(s, node, node.in_target_lane,
                                       [&](std::size_t at) { return behind(d, car.x[at]); }));
   }
-  return r;
-}
-
-// The rows of `first`, then those of `second`, then `extra`.
-std::vector<HalfSpace> joined(const std::vector<HalfSpace>& first,
-                              const std::vector<HalfSpace>& second,
-                              std::initializer_list<HalfSpace> extra) {
-  std::vector<HalfSpace> out;
-  out.reserve(first.size() + second.size() + extra.size());
-  out.insert(out.end(), first.begin(), first.end());
-  out.insert(out.end(), second.begin(), second.end());
-  out.insert(out.end(), extra.begin(), extra.end());
-  return out;
 }
 
 // Where the lane line is and what the body is, at one node.
@@ -188,42 +177,43 @@ struct LaneGeometry {
   Interval heading;          ///< the headings the node can have
 };
 
-std::vector<LaneMode> footprint_heading_modes(const CarRows& r, const LaneGeometry& lane);
-
-std::vector<LaneMode> lane_modes(const CarRows& r, LaneRule rule, const LaneGeometry& lane) {
-  const double boundary = lane.boundary;
-  const double half_width = lane.half_width;
-  if (rule == LaneRule::EitherOr) {
-    return {{LaneOccupancy::EgoLane, joined(r.ego_lane, {}, {row(0, 1, 0, boundary)})},
-            {LaneOccupancy::TargetLane, joined({}, r.target_lane, {row(0, -1, 0, -boundary)})}};
-  }
-  if (rule == LaneRule::FootprintHeading) return footprint_heading_modes(r, lane);
-  // Footprint: the body is in every lane it touches. Touching both lanes
-  // needs every row; the y rows of the one-lane modes keep the body clear of
-  // the lane line. The both-lanes mode is limited to the band where the body
-  // does touch the line: outside it, its points already belong to a one-lane
-  // mode (they keep that mode's rows and more), so the union of the modes is
-  // the same, but a relaxation no longer lets a "both lanes" node sit anywhere
-  // across the road, and the modes no longer overlap.
-  return {{LaneOccupancy::EgoLane, joined(r.ego_lane, {}, {row(0, 1, 0, boundary - half_width)})},
-          {LaneOccupancy::BothLanes,
-           joined(r.ego_lane, r.target_lane,
-                  {row(0, 1, 0, boundary + half_width), row(0, -1, 0, -(boundary - half_width))})},
-          {LaneOccupancy::TargetLane,
-           joined({}, r.target_lane, {row(0, -1, 0, -(boundary + half_width))})}};
+void append(std::vector<HalfSpace>& rows, std::initializer_list<HalfSpace> more) {
+  rows.insert(rows.end(), more.begin(), more.end());
 }
 
-// The body turned by theta reaches half_width cos(theta) + half_length
-// |sin(theta)| to either side of its centre; half_width + half_length |theta|
-// is never less, so a one-lane mode's two rows (one per sign of theta) keep
-// every corner in its lane. The both-lanes set, |y - line| <= half_width +
-// half_length |theta|, is not convex; its rows are its convex hull over the
-// node's headings (|theta| replaced by its chord there), so the three modes
-// still cover the road and the search stays exact. Where the headings have one
-// sign, as under monotone_lateral, the chord is |theta| itself.
-std::vector<LaneMode> footprint_heading_modes(const CarRows& r, const LaneGeometry& lane) {
+// The y rows of each mode (see fill_node_modes), after its car rows.
+void add_lane_rows(LaneRule rule, const LaneGeometry& lane, std::vector<LaneMode>& modes) {
   const double b = lane.boundary;
   const double w = lane.half_width;
+  auto& ego = modes.front().rows;
+  auto& target = modes.back().rows;
+  if (rule == LaneRule::EitherOr) {
+    append(ego, {row(0, 1, 0, b)});
+    append(target, {row(0, -1, 0, -b)});
+    return;
+  }
+  auto& both = modes[1].rows;
+  if (rule == LaneRule::Footprint) {
+    // Footprint: the body is in every lane it touches. Touching both lanes
+    // needs every row; the y rows of the one-lane modes keep the body clear of
+    // the lane line. The both-lanes mode is limited to the band where the body
+    // does touch the line: outside it, its points already belong to a one-lane
+    // mode (they keep that mode's rows and more), so the union of the modes is
+    // the same, but a relaxation no longer lets a "both lanes" node sit anywhere
+    // across the road, and the modes no longer overlap.
+    append(ego, {row(0, 1, 0, b - w)});
+    append(both, {row(0, 1, 0, b + w), row(0, -1, 0, -(b - w))});
+    append(target, {row(0, -1, 0, -(b + w))});
+    return;
+  }
+  // The body turned by theta reaches half_width cos(theta) + half_length
+  // |sin(theta)| to either side of its centre; half_width + half_length |theta|
+  // is never less, so a one-lane mode's two rows (one per sign of theta) keep
+  // every corner in its lane. The both-lanes set, |y - line| <= half_width +
+  // half_length |theta|, is not convex; its rows are its convex hull over the
+  // node's headings (|theta| replaced by its chord there), so the three modes
+  // still cover the road and the search stays exact. Where the headings have one
+  // sign, as under monotone_lateral, the chord is |theta| itself.
   const double l = lane.half_length;
   const double lo = lane.heading.lo;
   const double hi = lane.heading.hi;
@@ -232,13 +222,31 @@ std::vector<LaneMode> footprint_heading_modes(const CarRows& r, const LaneGeomet
   const double chord_offset = std::abs(lo) - chord_slope * lo;
   const double reach = w + l * chord_offset;
   const double slope = l * chord_slope;
-  return {{LaneOccupancy::EgoLane,
-           joined(r.ego_lane, {}, {row(0, 1, 0, b - w, l), row(0, 1, 0, b - w, -l)})},
-          {LaneOccupancy::BothLanes,
-           joined(r.ego_lane, r.target_lane,
-                  {row(0, 1, 0, b + reach, -slope), row(0, -1, 0, reach - b, -slope)})},
-          {LaneOccupancy::TargetLane,
-           joined({}, r.target_lane, {row(0, -1, 0, -(b + w), l), row(0, -1, 0, -(b + w), -l)})}};
+  append(ego, {row(0, 1, 0, b - w, l), row(0, 1, 0, b - w, -l)});
+  append(both, {row(0, 1, 0, b + reach, -slope), row(0, -1, 0, reach - b, -slope)});
+  append(target, {row(0, -1, 0, -(b + w), l), row(0, -1, 0, -(b + w), -l)});
+}
+
+// A node's modes in lane_mode_index's order, each with its rows: the ego
+// lane's car rows, the target lane's (both for the both-lanes mode), then its
+// y rows. Filled in place, so a node's lists keep their memory from one
+// build to the next.
+void fill_node_modes(const Scenario& s, const Config& config, const TrafficPrediction& p,
+                     const NodeContext& node, const Gap& gap, const LaneGeometry& lane,
+                     std::vector<LaneMode>& modes) {
+  const LaneRule rule = config.expert.lane_rule;
+  const bool both_lanes = rule != LaneRule::EitherOr;
+  modes.resize(both_lanes ? 3 : 2);
+  modes.front().occupancy = LaneOccupancy::EgoLane;
+  modes.back().occupancy = LaneOccupancy::TargetLane;
+  fill_car_rows(s, config, p, node, gap, {modes.front().rows, modes.back().rows});
+  if (both_lanes) {
+    LaneMode& both = modes[1];
+    both.occupancy = LaneOccupancy::BothLanes;
+    both.rows.assign(modes.front().rows.begin(), modes.front().rows.end());
+    both.rows.insert(both.rows.end(), modes.back().rows.begin(), modes.back().rows.end());
+  }
+  add_lane_rows(rule, lane, modes);
 }
 
 // The headings a node at time t can have: its bounds, cut to what the yaw
@@ -329,15 +337,21 @@ LaneChangeQp build_lane_change_qp(const Scenario& s, const Config& config, const
 
 LaneChangeQp build_lane_change_qp(const Scenario& s, const Config& config, const Iterate& point,
                                   const TrafficPrediction& prediction, const Gap& gap) {
-  const ExpertSettings& e = config.expert;
   LaneChangeQp qp;
+  build_lane_change_qp(s, config, point, prediction, gap, qp);
+  return qp;
+}
+
+void build_lane_change_qp(const Scenario& s, const Config& config, const Iterate& point,
+                          const TrafficPrediction& prediction, const Gap& gap, LaneChangeQp& qp) {
+  const ExpertSettings& e = config.expert;
   qp.steps = s.steps;
   qp.dt = s.horizon / s.steps;
   const int n = qp.steps;
   qp.initial_state << s.ego.x, s.ego.y, s.ego.v, s.ego.theta;
-  qp.dynamics.reserve(n);
+  qp.dynamics.resize(n);
   for (int k = 0; k < n; ++k) {
-    qp.dynamics.push_back(trapezoid_step(point.states[k], point.states[k + 1], qp.dt));
+    qp.dynamics[k] = trapezoid_step(point.states[k], point.states[k + 1], qp.dt);
   }
   qp.accel_weight = e.weight_accel * qp.dt;
   qp.jerk_weight =
@@ -351,9 +365,12 @@ LaneChangeQp build_lane_change_qp(const Scenario& s, const Config& config, const
   qp.terminal_x_reference = aim_into(s, config, prediction, gap, prediction.nodes() - 1).x;
   // x has no bound of its own; these never bind and give the big-M rows a box.
   constexpr double kXSlack = 50.0;
+  qp.state_lower.resize(n + 1);
+  qp.state_upper.resize(n + 1);
   for (int k = 0; k <= n; ++k) {
     const double t = k * qp.dt;
-    State lo, hi;
+    State& lo = qp.state_lower[k];
+    State& hi = qp.state_upper[k];
     // "y never decreases" as a constraint: a heading of at least 0, from the
     // first node the yaw rate can bring it there.
     // Once the ego is at the target-lane centre it may settle back onto it
@@ -366,14 +383,13 @@ LaneChangeQp build_lane_change_qp(const Scenario& s, const Config& config, const
     lo << s.ego.x - kXSlack, -s.limits.lateral_margin, speed.lo, lowest_heading;
     hi << s.ego.x + std::max(s.limits.v.hi, s.ego.v) * t + kXSlack,
         s.lane_width + s.limits.lateral_margin, speed.hi, std::numbers::pi / 2;
-    qp.state_lower.push_back(lo);
-    qp.state_upper.push_back(hi);
   }
   qp.control_lower << s.limits.a.lo, s.limits.omega.lo;
   qp.control_upper << s.limits.a.hi, s.limits.omega.hi;
   qp.terminal_lateral_fixed = e.fix_terminal_lateral;
   qp.yaw_rate_per_speed = e.min_turn_radius > 0.0 ? 1.0 / e.min_turn_radius : 0.0;
-  qp.node_modes.assign(n + 1, {});
+  qp.node_modes.resize(n + 1);
+  if (!e.constrain_initial_node) qp.node_modes[0].clear();
   const int last_prediction = prediction.nodes() - 1;
   for (int k = e.constrain_initial_node ? 0 : 1; k <= n; ++k) {
     const int index = std::min(k + e.prediction_lead_steps, last_prediction);
@@ -386,9 +402,8 @@ LaneChangeQp build_lane_change_qp(const Scenario& s, const Config& config, const
         index, point.states[k][kV], qp.dt,
         restore > 0.0 && k > 0 ? std::max(0.0, 1.0 - k * qp.dt / restore) : 0.0,
         s.ego.y - lane.half_width<lane.boundary, s.ego.y + lane.half_width> lane.boundary};
-    qp.node_modes[k] = lane_modes(car_rows(s, config, prediction, node, gap), e.lane_rule, lane);
+    fill_node_modes(s, config, prediction, node, gap, lane, qp.node_modes[k]);
   }
-  return qp;
 }
 
 double LaneChangeQp::objective(const Iterate& path) const {

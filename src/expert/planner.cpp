@@ -88,6 +88,7 @@ struct RoundContext {
   const std::vector<int>* first_modes;  ///< lane modes to try first in round 1 (or none)
   const Gap* only_gap;                  ///< the one gap to plan through (or none)
   bool first_point_is_warm_start;       ///< round 1 then warm-starts each gap on its own
+  LaneChangeQp* qp;                     ///< each gap's problem in turn, built in place
 };
 
 // Keeps the round's solution within `radius` of the linearization point in x
@@ -184,10 +185,10 @@ void add_work(LaneChangeSolution& total, const LaneChangeSolution& part) {
   total.solve_ms += part.solve_ms;
 }
 
-// What one gap's solve leaves: its solution and the cars as it saw them.
+// What one gap's solve leaves: its solution and the cars as it saw them (its
+// problem stays in the context's qp until the next gap's).
 struct GapSolve {
   LaneChangeSolution solution;
-  LaneChangeQp qp;
   TrafficPrediction prediction;
 };
 
@@ -199,14 +200,15 @@ GapSolve solve_gap(const RoundContext& c, const Gap& gap, const Iterate& point, 
   GapSolve out;
   out.prediction = base;
   predict_along(c.scenario, c.config, c.predicted_steps, c.dt, point, out.prediction);
-  out.qp = build_lane_change_qp(c.scenario, c.config, point, out.prediction, gap);
-  if (std::isfinite(radius)) restrict_to_box(out.qp, point, radius);
-  const std::vector<int> mode_hint = mode_hint_for(c, result, out.qp, point);
+  LaneChangeQp& qp = *c.qp;
+  build_lane_change_qp(c.scenario, c.config, point, out.prediction, gap, qp);
+  if (std::isfinite(radius)) restrict_to_box(qp, point, radius);
+  const std::vector<int> mode_hint = mode_hint_for(c, result, qp, point);
   MiqpSettings settings;
   settings.time_limit_s = c.time_limit_s - elapsed_ms(c.start) / 1000.0;
   settings.qp_iteration_limit = c.qp_iteration_limit - *c.qp_iterations_spent;
   settings.objective_cutoff = cutoff;
-  out.solution = c.solver.solve(out.qp, settings, {c.workspace, &mode_hint, &point.controls});
+  out.solution = c.solver.solve(qp, settings, {c.workspace, &mode_hint, &point.controls});
   *c.qp_iterations_spent += out.solution.qp_iterations;
   return out;
 }
@@ -262,7 +264,7 @@ RoundSolution solve_round(const RoundContext& c, const Iterate& point, double ra
     if (s.status != MiqpStatus::Infeasible) bound = std::min(bound, s.best_bound);
     if (failed && &gap != &gaps.back()) bound = -kInfinity;  // gaps left unsolved
     if (better || failed) {
-      auto occupancy = occupancy_of(g.qp, s.modes);
+      auto occupancy = occupancy_of(*c.qp, s.modes);
       best = {std::move(g.solution), std::move(occupancy), gap};
       result.prediction = std::move(g.prediction);
       if (failed) break;
@@ -521,6 +523,7 @@ ExpertResult ExpertPlanner::plan(const Scenario& scenario, const PlanLimits& lim
   const auto nodes = static_cast<std::size_t>(scenario.steps) + 1;
   const bool modes_fit = hints.modes != nullptr && hints.modes->size() == nodes;
   long qp_iterations_spent = 0;
+  LaneChangeQp qp;
   const RoundContext context{scenario,
                              config,
                              *solver_,
@@ -533,7 +536,8 @@ ExpertResult ExpertPlanner::plan(const Scenario& scenario, const PlanLimits& lim
                              dt,
                              modes_fit ? hints.modes : nullptr,
                              hints.gap,
-                             !hint_path_fits(scenario, hints)};
+                             !hint_path_fits(scenario, hints),
+                             &qp};
   ExpertResult result;
   result.prediction = predict_traffic(scenario, config, context.predicted_steps, dt);
   Iterate previous;

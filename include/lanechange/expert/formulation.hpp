@@ -134,6 +134,10 @@ struct GapAim {
                                                 const Iterate& point,
                                                 const TrafficPrediction& prediction,
                                                 const Gap& gap);
+/// The same into `qp`, in place: its lists keep their memory, so a build of a
+/// problem no larger than the last one allocates nothing.
+void build_lane_change_qp(const Scenario& scenario, const Config& config, const Iterate& point,
+                          const TrafficPrediction& prediction, const Gap& gap, LaneChangeQp& qp);
 /// The same through Eq. 1's gap (paper_gap).
 [[nodiscard]] LaneChangeQp build_lane_change_qp(const Scenario& scenario, const Config& config,
                                                 const Iterate& point,
