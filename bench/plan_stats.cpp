@@ -55,10 +55,17 @@ int main(int argc, char** argv) {
   const lc::ScenarioSampler sampler(config, 2026);
   const ex::ExpertPlanner planner(config, std::make_shared<ex::FastLaneChangeSolver>());
   Totals totals;
+  // One workspace and problem for every plan, as a thread that plans one
+  // scene after another keeps them.
+  const auto workspace = planner.solver().make_workspace();
+  ex::LaneChangeQp problem;
+  ex::PlanHints hints;
+  hints.workspace = workspace.get();
+  hints.problem = &problem;
   for (int i = 0; i < count; ++i) {
     const lc::Scenario scene = sampler.sample(static_cast<std::uint64_t>(i));
     const double start = thread_cpu_ms();
-    const ex::ExpertResult result = planner.plan(scene);
+    const ex::ExpertResult result = planner.plan(scene, {}, hints);
     const double ms = thread_cpu_ms() - start;
     long nodes = 0, incumbent_qps = 0, iterations = 0;
     std::string per_round;

@@ -748,6 +748,7 @@ void Search::find_incumbent(const NodeOutcome& root, const SolveHints& hints) {
 // Depth first from the root, best child first. True when the search ran to
 // its end; false when a limit stopped it, with the solution filled in.
 bool Search::branch_and_bound(const std::vector<int>& root_modes, NodeOutcome root) {
+  for (OpenNode& left : ws_.stack) ws_.spare_modes.push_back(std::move(left.modes));
   ws_.stack.clear();
   numerical_trouble_ = root.numerical_failure;
   if (!root.feasible) return true;
@@ -757,12 +758,13 @@ bool Search::branch_and_bound(const std::vector<int>& root_modes, NodeOutcome ro
   explore(root_modes, std::move(root), -kInfinity);
   while (!ws_.stack.empty()) {
     if (stopped_at_limit(kInfinity)) return false;
-    const OpenNode node = std::move(ws_.stack.back());
+    OpenNode node = std::move(ws_.stack.back());
     ws_.stack.pop_back();
     NodeOutcome o =
         solve_node(qp_, node.modes, ws_, prune_level(), NodePrecision::RoughBelowCutoff);
     ++out_.nodes;
     explore(node.modes, std::move(o), node.bound);
+    ws_.spare_modes.push_back(std::move(node.modes));
   }
   return true;
 }
@@ -812,14 +814,19 @@ void Search::explore(const std::vector<int>& modes, NodeOutcome o, double inheri
 void Search::push_children(const std::vector<int>& modes, int k, const State& relaxed,
                            double bound) {
   const auto& options = qp_.node_modes[k];
-  std::vector<std::pair<double, int>> order;
-  order.reserve(options.size());
+  auto& order = ws_.child_order;
+  order.clear();
   for (int m = 0; m < static_cast<int>(options.size()); ++m) {
     if (ws_.possible(k, m)) order.emplace_back(mode_violation(options[m], relaxed), m);
   }
   std::sort(order.begin(), order.end(), std::greater<>());
   for (const auto& [violation, m] : order) {
-    std::vector<int> child = modes;
+    std::vector<int> child;
+    if (!ws_.spare_modes.empty()) {
+      child = std::move(ws_.spare_modes.back());
+      ws_.spare_modes.pop_back();
+    }
+    child.assign(modes.begin(), modes.end());
     child[k] = m;
     ws_.stack.push_back(OpenNode{std::move(child), bound});
   }

@@ -2,6 +2,7 @@
 // The fast solver's node solve, shared with the fixed-mode solver: both solve
 // structured QPs of one round with some lane modes fixed, and one workspace
 // type serves both, so a caller may hand either back-end the other's.
+#include <utility>
 #include <vector>
 
 #include "lanechange/expert/lane_change_solver.hpp"
@@ -27,6 +28,10 @@ struct FastWorkspace final : LaneChangeWorkspace {
   StructuredQp node;  // the base plus the lane rows of one search node
   QpWorkspace qp_workspace;
   std::vector<OpenNode> stack;  // waiting to be solved
+  // Mode lists of nodes the search is done with, for the next children: a
+  // search allocates none once the stack has been as deep before.
+  std::vector<std::vector<int>> spare_modes;
+  std::vector<std::pair<double, int>> child_order;  // push_children's, kept for its memory
   std::vector<Control> start_controls;
   long iterations = 0;         // of the interior-point method, for the solution's statistics
   unsigned needed_bounds = 0;  // state components whose bounds this round's QPs carry

@@ -523,7 +523,7 @@ ExpertResult ExpertPlanner::plan(const Scenario& scenario, const PlanLimits& lim
   const auto nodes = static_cast<std::size_t>(scenario.steps) + 1;
   const bool modes_fit = hints.modes != nullptr && hints.modes->size() == nodes;
   long qp_iterations_spent = 0;
-  LaneChangeQp qp;
+  LaneChangeQp own_problem;
   const RoundContext context{scenario,
                              config,
                              *solver_,
@@ -537,7 +537,7 @@ ExpertResult ExpertPlanner::plan(const Scenario& scenario, const PlanLimits& lim
                              modes_fit ? hints.modes : nullptr,
                              hints.gap,
                              !hint_path_fits(scenario, hints),
-                             &qp};
+                             hints.problem != nullptr ? hints.problem : &own_problem};
   ExpertResult result;
   result.prediction = predict_traffic(scenario, config, context.predicted_steps, dt);
   Iterate previous;

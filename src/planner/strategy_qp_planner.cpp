@@ -102,6 +102,7 @@ CandidateOutcome StrategyQpPlanner::solve_candidate(const Scenario& scene,
   const auto start = Clock::now();
   expert::PlanHints through{hints.path, &modes, hints.path_is_plan, hints.workspace};
   through.gap = &gap;
+  through.problem = hints.problem;
   result = fixed_.plan(scene, limits, through);
   CandidateOutcome out;
   out.rounds = result.iterations();
@@ -467,9 +468,10 @@ StrategyPlan StrategyQpPlanner::plan(const Scenario& scene, const expert::PlanLi
   if (out.chosen < 0) {
     // No candidate holds: the exact search, started from the likeliest modes
     // (only what the candidates left of the limit: a step budget is one budget).
-    out.result = exact_.plan(
-        scene, left_of(limits, start, out.qp_iterations),
-        {hints.path, rescued_hint.empty() ? nullptr : &rescued_hint, hints.path_is_plan});
+    expert::PlanHints exact_hints{hints.path, rescued_hint.empty() ? nullptr : &rescued_hint,
+                                  hints.path_is_plan};
+    exact_hints.problem = hints.problem;
+    out.result = exact_.plan(scene, left_of(limits, start, out.qp_iterations), exact_hints);
     out.qp_iterations += qp_iterations_of(out.result);
   }
   out.total_ms = ms_since(start);

@@ -130,6 +130,75 @@ bool meets_lane_rows(const LaneMode& mode, double y, double theta) {
 // in its lane, and the three modes still cover every lateral position and
 // heading a node can reach; the footprint rule, which bounds the centre,
 // lets a turned body's corner past the line.
+// Every number of a problem, in order: two problems with the same list are the same.
+std::vector<double> numbers_of(const LaneChangeQp& qp) {
+  std::vector<double> out{static_cast<double>(qp.steps),
+                          qp.dt,
+                          qp.accel_weight,
+                          qp.yaw_rate_weight,
+                          qp.jerk_weight,
+                          qp.lateral_reference,
+                          qp.terminal_x_weight,
+                          qp.terminal_x_reference,
+                          qp.yaw_rate_per_speed};
+  const auto add = [&out](const auto& matrix) {
+    out.insert(out.end(), matrix.data(), matrix.data() + matrix.size());
+  };
+  add(qp.initial_state);
+  for (const StageDynamics& d : qp.dynamics) {
+    add(d.A);
+    add(d.B);
+    add(d.c);
+  }
+  out.insert(out.end(), qp.lateral_weight.begin(), qp.lateral_weight.end());
+  for (std::size_t k = 0; k < qp.state_lower.size(); ++k) {
+    add(qp.state_lower[k]);
+    add(qp.state_upper[k]);
+  }
+  for (const auto& modes : qp.node_modes) {
+    out.push_back(static_cast<double>(modes.size()));
+    for (const LaneMode& mode : modes) {
+      out.push_back(static_cast<double>(mode.occupancy));
+      out.push_back(static_cast<double>(mode.rows.size()));
+      for (const HalfSpace& h : mode.rows) {
+        add(h.g);
+        out.push_back(h.upper);
+      }
+    }
+  }
+  return out;
+}
+
+// A round's problem built in place over a larger one (ten target-lane cars,
+// the footprint rule's three modes) is the problem built afresh, and a
+// rebuild of the same problem keeps every list where it was.
+TEST(Formulation, AProblemBuiltInPlaceIsTheFreshOneAndKeepsItsMemory) {
+  const Scenario dense = testing::dense_scenario(10);
+  const Scenario open = open_road_scenario();
+  Config either_or;
+  either_or.expert.lane_rule = LaneRule::EitherOr;
+  const auto prediction_of = [](const Scenario& s, const Config& c) {
+    return predict_traffic(s, c, s.steps, s.horizon / s.steps);
+  };
+  for (const Config& config : {Config{}, either_or}) {
+    const TrafficPrediction dense_cars = prediction_of(dense, Config{});
+    const std::vector<Gap> gaps = target_lane_gaps(dense, GapChoice::Best);
+    const Gap& middle = gaps[gaps.size() / 2];
+    LaneChangeQp qp;
+    build_lane_change_qp(dense, Config{}, warm_start(dense, Config{}, dense_cars, middle),
+                         dense_cars, middle, qp);
+    const TrafficPrediction cars = prediction_of(open, config);
+    const Iterate point = warm_start(open, config, cars);
+    build_lane_change_qp(open, config, point, cars, paper_gap(open), qp);
+    EXPECT_EQ(numbers_of(qp), numbers_of(build_lane_change_qp(open, config, point, cars)));
+    const HalfSpace* rows = qp.node_modes[10].back().rows.data();
+    const State* bounds = qp.state_lower.data();
+    build_lane_change_qp(open, config, point, cars, paper_gap(open), qp);
+    EXPECT_EQ(rows, qp.node_modes[10].back().rows.data());
+    EXPECT_EQ(bounds, qp.state_lower.data());
+  }
+}
+
 TEST(Formulation, HeadingFootprintKeepsEveryCornerInItsLane) {
   Config config;
   config.expert.lane_rule = LaneRule::FootprintHeading;

@@ -112,6 +112,10 @@ struct PlanHints {
   /// planner that replays the modes replays them into it. The exact search
   /// tries every allowed gap and needs none.
   const GapFrame* last_gap = nullptr;
+  /// Where the rounds build each gap's problem, kept by the caller across
+  /// plans as `workspace` is: a thread's later plans then reuse its memory.
+  /// nullptr: one per plan.
+  LaneChangeQp* problem = nullptr;
 };
 
 /// The cars as a round linearized about `point` sees them: predicted along
