@@ -25,6 +25,36 @@ std::uint64_t scenario_seed(std::uint64_t seed, std::uint64_t index) {
   return mixer.next();
 }
 
+namespace {
+
+// The largest speed by which a car may close in on the car ahead and still
+// match its speed within their bumper gap, braking at `brake` after a step
+// of `dt`: dv dt + dv^2 / (2 brake) = gap.
+double resolvable_closing(double gap, double brake, double dt) {
+  return brake * (std::sqrt(dt * dt + 2.0 * std::max(gap, 0.0) / brake) - dt);
+}
+
+// A platoon car (cars first.. of `s`, back to front) faster than the car ahead
+// keeps no more speed than braking at traffic.max_decel, less the car ahead's
+// own braking, can still take off within their gap: a scene starts with no
+// collision that no driver could avoid.
+void keep_platoon_avoidable(Scenario& s, std::size_t first, const Config& config) {
+  if (!config.traffic.max_decel) return;
+  const double own_braking =
+      s.behavior == Behavior::ConstantAccel ? std::max(0.0, -config.sampler.accel.lo) : 0.0;
+  const double brake = *config.traffic.max_decel - own_braking;
+  if (brake <= 0.0) return;
+  const double dt = s.horizon / s.steps;
+  for (std::size_t i = s.cars.size() - 1; i > first; --i) {
+    const CarState& ahead = s.cars[i].state;
+    CarState& behind = s.cars[i - 1].state;
+    const double gap = ahead.x - behind.x - s.vehicle.length;
+    behind.v = std::min(behind.v, ahead.v + resolvable_closing(gap, brake, dt));
+  }
+}
+
+}  // namespace
+
 ScenarioSampler::ScenarioSampler(Config config, std::uint64_t seed)
     : config_(std::move(config)), seed_(seed) {
   config_.validate();
@@ -110,6 +140,7 @@ Scenario ScenarioSampler::dense(Rng& rng, Behavior behavior) const {
     id += std::to_string(i);
     add(std::move(id), Lane::Target, x, rng.uniform(p.target_speed));
   }
+  keep_platoon_avoidable(s, s.cars.size() - static_cast<std::size_t>(count), config_);
   for (const Role role : kRoles) s.roles[static_cast<std::size_t>(role)] = nearest_in_role(s, role);
   return s;
 }
