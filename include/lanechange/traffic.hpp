@@ -95,6 +95,13 @@ class TrafficModel {
 
   [[nodiscard]] const CarState& car(CarIndex which) const { return cars_[which]; }
   [[nodiscard]] const std::vector<CarState>& cars() const { return cars_; }
+  /// A car as the planners observe it: x and v now, and the acceleration it
+  /// drives by. That is a constant-acceleration car's own (the behavior's,
+  /// which it keeps wherever the car ahead lets it), not the braking of a
+  /// step in which it followed: predicted on, that braking would stop the
+  /// car where the model has it return to its own acceleration. Any other
+  /// car's is its last step's.
+  [[nodiscard]] CarState observed(CarIndex which) const;
   [[nodiscard]] std::size_t car_count() const { return cars_.size(); }
   /// Whether the car's last step was set by the ego ahead of it (it followed
   /// the ego): its braking then is the ego's doing.

@@ -61,7 +61,7 @@ class Loop {
     observation_.step = k;
     observation_.t = k * dt_;
     observation_.ego = ego_;
-    std::copy(traffic_.cars().begin(), traffic_.cars().end(), observation_.cars.begin());
+    for (CarIndex c = 0; c < traffic_.car_count(); ++c) observation_.cars[c] = traffic_.observed(c);
     return observation_;
   }
 

@@ -164,6 +164,12 @@ TrafficModel::TrafficModel(const Scenario& scenario, const Config& config, Recor
   }
 }
 
+CarState TrafficModel::observed(CarIndex which) const {
+  CarState car = cars_[which];
+  if (behavior_[which] == Behavior::ConstantAccel) car.a = behavior_accel_[which];
+  return car;
+}
+
 // Cars keep their order in a lane from one step to the next, so an
 // insertion sort finds the new order in one pass.
 void TrafficModel::sort_by_lane_and_position() {

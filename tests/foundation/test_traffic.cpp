@@ -211,6 +211,37 @@ TEST(Followers, AConstantSpeedCarBrakesForTheEgoAheadInItsLane) {
   EXPECT_FALSE(traffic.followed_ego(car_of(Role::Target)));
 }
 
+// A constant-acceleration car that brakes to follow the car ahead is
+// observed with its own acceleration, so that a prediction from what a
+// planner observes moves it as the world does. With the braking step's
+// acceleration, the prediction would brake it on to a stop.
+TEST(Followers, APredictionFromTheObservedCarsMovesThemAsTheWorldDoes) {
+  Scenario s = two_lane_scene(Behavior::ConstantAccel);
+  const CarIndex follower = car_of(Role::Follower);
+  s.follower() = {0.0, 14.0, 0.5};
+  s.target() = {25.0, 9.0, 0.3};
+  s.ego = {-60.0, 0.0, 10.0, 0.0, 0.0};
+  const Config config;
+  const double dt = 0.1;
+  const auto ego_at = [&](int k) {
+    return EgoFootprint{s.ego.x + s.ego.v * k * dt, s.ego.y, s.ego.v};
+  };
+  TrafficModel world(s, config);
+  int k = 0;
+  for (; k < 50 && world.car(follower).a >= 0.0; ++k) world.step(dt, ego_at(k));
+  ASSERT_LT(world.car(follower).a, 0.0);  // it follows the target
+  EXPECT_DOUBLE_EQ(world.observed(follower).a, 0.5);
+  Scenario now = s;
+  now.ego.x = ego_at(k).x;
+  for (CarIndex c = 0; c < now.car_count(); ++c) now.cars[c].state = world.observed(c);
+  const int steps = 40;
+  const TrafficPrediction predicted = predict_traffic(now, config, steps, dt);
+  for (int j = 1; j <= steps; ++j) {
+    world.step(dt, ego_at(k + j - 1));
+    ASSERT_NEAR(predicted.car(follower).x[j], world.car(follower).x, 1e-9) << j;
+  }
+}
+
 // IDM asks for any braking a cut-in 2 m ahead calls for; the car brakes at
 // most traffic.max_decel.
 TEST(Followers, NoCarBrakesHarderThanItsPhysicalLimit) {

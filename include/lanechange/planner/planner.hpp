@@ -21,9 +21,11 @@ namespace lanechange::planner {
 struct Observation {
   const Scenario* scene = nullptr;  ///< the initial scene (t = 0)
   int step = 0;
-  double t = 0.0;              ///< s since the start
-  EgoState ego;                ///< ego.a is the acceleration applied in the last step
-  std::vector<CarState> cars;  ///< every car of the scene, in its order
+  double t = 0.0;  ///< s since the start
+  EgoState ego;    ///< ego.a is the acceleration applied in the last step
+  /// Every car of the scene, in its order; a is the acceleration it drives
+  /// by (TrafficModel::observed).
+  std::vector<CarState> cars;
   [[nodiscard]] const CarState& car(CarIndex which) const { return cars[which]; }
   [[nodiscard]] const CarState& car(Role role) const { return cars[scene->index_of(role)]; }
 };
