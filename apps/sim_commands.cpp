@@ -31,6 +31,7 @@ struct EvaluateArgs {
   std::string sumo_highway;     ///< densities, comma-separated: SUMO episodes instead of scenes
   std::string sumo_commonroad;  ///< a directory of interactive scenario folders
   std::string prediction = "constant_speed";  ///< SUMO episodes: how planners predict SUMO's cars
+  bool signal_change = true;                  ///< SUMO episodes: the ego asks SUMO for the change
   bool shard_size_given = false;
   std::string behavior;
   std::string target_lane_cars;
@@ -120,6 +121,7 @@ void evaluate_sumo(const EvaluateArgs& a, const Config& config) {
   if (a.shard_size_given) s.shard_size = o.shard_size;
   s.loop.duration = o.duration;
   s.loop.prediction = behavior_from_string(a.prediction, "--prediction");
+  s.loop.signal_change = a.signal_change;
   s.config = config;
   s.make_planner = baselines::make_planner;
   run_evaluation(a.jobs, s.out_dir,
@@ -177,13 +179,19 @@ void add_evaluate(CLI::App& app, const ConfigSource& config) {
                                      "SUMO episodes: how planners predict SUMO's cars (idm, "
                                      "constant_speed or constant_accel; docs/sumo.md)")
                          ->capture_default_str();
+  auto* no_signal = cmd->add_flag("!--no-signal", a->signal_change,
+                                  "SUMO episodes: the ego does not ask SUMO for the change, so "
+                                  "SUMO's cars do not cooperate with it (docs/sumo.md)");
   cmd->callback([a, config, count, seed, scenes, sumo_highway, sumo_commonroad, shard_size,
-                 prediction] {
+                 prediction, no_signal] {
     a->shard_size_given = shard_size->count() > 0;
-    if (prediction->count() > 0 && sumo_highway->count() == 0 && sumo_commonroad->count() == 0) {
-      throw InputError("--prediction",
-                       "applies to SUMO episodes only (--sumo-highway or "
-                       "--sumo-commonroad)");
+    const bool sumo_episodes = sumo_highway->count() > 0 || sumo_commonroad->count() > 0;
+    for (const CLI::Option* sumo_only : {prediction, no_signal}) {
+      if (sumo_only->count() > 0 && !sumo_episodes) {
+        throw InputError(sumo_only->get_name(),
+                         "applies to SUMO episodes only (--sumo-highway or "
+                         "--sumo-commonroad)");
+      }
     }
     if (sumo_commonroad->count() > 0) {
       evaluate_sumo(*a, config());

@@ -78,6 +78,8 @@ void add_sumo(CLI::App& app, const ConfigSource& config) {
   cmd->add_option("--prediction", a->prediction,
                   "How planners predict SUMO's cars: idm, constant_speed or constant_accel")
       ->capture_default_str();
+  cmd->add_flag("!--no-signal", a->loop.signal_change,
+                "The ego does not ask SUMO for the change: SUMO's cars do not cooperate with it");
   cmd->add_option("--work", a->loop.work_dir, "Directory for SUMO's files (default: OUT.sumo)");
   cmd->add_option("--out", a->out_path, "Rollout JSON file")->required();
   cmd->callback([a, config] { run_episode(*a, config()); });

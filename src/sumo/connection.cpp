@@ -151,6 +151,10 @@ void SumoConnection::move_ego(const RoadFrame& frame, const EgoState& e, double 
   libsumo::Vehicle::setSpeed(kEgoId, e.v);
 }
 
+void SumoConnection::signal_ego_change(int lane_offset, double seconds) {
+  libsumo::Vehicle::changeLaneRelative(kEgoId, lane_offset, seconds);
+}
+
 double SumoConnection::ego_pose_error(const RoadFrame& frame, const EgoState& e,
                                       double ego_length) const {
   const libsumo::TraCIPosition p = libsumo::Vehicle::getPosition(kEgoId);

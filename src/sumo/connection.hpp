@@ -75,6 +75,10 @@ class SumoConnection {
                const VehicleSize& size);
   /// Moves the ego to `ego` (our frame) before the next step.
   void move_ego(const RoadFrame& frame, const EgoState& ego, double ego_length);
+  /// Asks SUMO's lane-change model of the ego for a change of `lane_offset`
+  /// lanes (+1 left) for `seconds`: SUMO's cars around it answer the wish
+  /// (cooperative slowing), while moveToXY keeps placing the ego.
+  void signal_ego_change(int lane_offset, double seconds);
   /// The distance (m) between SUMO's ego front bumper and ours.
   [[nodiscard]] double ego_pose_error(const RoadFrame& frame, const EgoState& ego,
                                       double ego_length) const;

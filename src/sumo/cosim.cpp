@@ -71,6 +71,9 @@ class Episode {
                                                      : default_scenario(config_).horizon +
                                                            config_.closed_loop.settle_time;
     const int steps = std::max(1, static_cast<int>(std::lround(duration / dt)));
+    if (settings_.signal_change) {
+      sumo_.signal_ego_change(frame_.side() == Side::Left ? 1 : -1, duration);
+    }
     CoSimResult out;
     sim::Rollout& rollout = out.rollout;
     path_.planner = std::string(planner.name());

@@ -114,7 +114,8 @@ json parameters_of(const EvaluateOptions& o, const std::vector<EpisodeSpec>& epi
            {{"range", c.range},
             {"request_after", c.request_after},
             {"duration", c.duration},
-            {"prediction", std::string(to_string(c.prediction))}}},
+            {"prediction", std::string(to_string(c.prediction))},
+            {"signal_change", c.signal_change}}},
           {"config", o.config}};
 }
 

@@ -17,18 +17,20 @@ namespace lanechange::sumo {
 namespace {
 
 // Traffic on both lanes, in which the expert finds a gap: 30 cars per lane
-// and km, seed 1.
+// and km, seed 2.
 HighwaySettings busy_highway() {
   HighwaySettings h;
   h.density = 30.0;
-  h.seed = 1;
+  h.seed = 2;
   return h;
 }
 
-CoSimResult run_miqp(const HighwaySettings& highway, const testing::TempDir& dir) {
+CoSimResult run_miqp(const HighwaySettings& highway, const testing::TempDir& dir,
+                     bool signal_change = true) {
   const Config config = as_sumo_drives(testing::untimed_config());
   const auto planner = baselines::make_planner("miqp", config);
   CoSimSettings settings;
+  settings.signal_change = signal_change;
   settings.work_dir = dir.path().string() + "/sumo";
   return run_highway(*planner, config, highway, settings);
 }
@@ -59,6 +61,23 @@ TEST(SumoHighway, TheExpertChangesLanesAndTheCarBehindFollowsTheEgo) {
     if (!t.others.car(*behind).present_at(k)) continue;
     EXPECT_LT(t.others.car(*behind).x[k], t.ego[k].x) << "it passed the ego at node " << k;
   }
+}
+
+// Dense traffic (40 cars per lane and km, seed 2) opens no gap by itself:
+// the expert merges where the ego asks SUMO for the change and SUMO's cars
+// cooperate, and stays in its lane where it does not ask.
+TEST(SumoHighway, TheTargetLaneOpensAGapForAnEgoThatSignals) {
+  HighwaySettings dense;
+  dense.density = 40.0;
+  dense.seed = 2;
+  const testing::TempDir dir;
+  const CoSimResult signalled = run_miqp(dense, dir, true);
+  EXPECT_EQ(signalled.rollout.outcome, sim::Outcome::WellPosed) << signalled.rollout.reason;
+  EXPECT_FALSE(signalled.rollout.trajectory.collision);
+  EXPECT_LE(signalled.rollout.forced_decel, testing::untimed_config().closed_loop.unsafe_decel);
+  const testing::TempDir silent_dir;
+  const CoSimResult silent = run_miqp(dense, silent_dir, false);
+  EXPECT_EQ(silent.rollout.outcome, sim::Outcome::Aborted) << silent.rollout.reason;
 }
 
 TEST(SumoHighway, SumosEgoIsOursAfterEveryStep) {
@@ -167,6 +186,14 @@ TEST(SumoHighway, BadSettingsExitTwoNamingTheOption) {
   const auto r = testing::run_cli("sumo --out " + dir.path().string() + "/r.json");
   EXPECT_EQ(r.exit_code, 2) << r.output;
   EXPECT_NE(r.output.find("--highway"), std::string::npos) << r.output;
+  // SUMO's options name themselves when given to scenes of our own.
+  for (const std::string sumo_only : {"--prediction idm", "--no-signal"}) {
+    const auto scenes = testing::run_cli("evaluate --count 1 --seed 1 " + sumo_only + " --out " +
+                                         dir.path().string() + "/eval");
+    EXPECT_EQ(scenes.exit_code, 2) << scenes.output;
+    EXPECT_NE(scenes.output.find(sumo_only.substr(0, sumo_only.find(' '))), std::string::npos)
+        << scenes.output;
+  }
 }
 
 }  // namespace

@@ -42,6 +42,13 @@ struct CoSimSettings {
   /// The model planners predict SUMO's cars by: their speed kept, and Krauss
   /// following (traffic.followers_react), the model SUMO drives them by.
   Behavior prediction = Behavior::ConstantSpeed;
+  /// When the change is asked, the ego also asks SUMO for it
+  /// (Vehicle::changeLaneRelative), as a driver signals: SUMO's cars then
+  /// cooperate with it as with one of their own that wants to change (SL2015:
+  /// a car blocking the change slows to open the gap). SUMO never moves the
+  /// ego; our ego model does. Off, SUMO's cars do not know of the change
+  /// until the ego's body reaches their lane.
+  bool signal_change = true;
   std::string work_dir;  ///< SUMO's input files and its own outputs go here
 };
 
