@@ -171,13 +171,13 @@ void plan_all(benchmark::State& state, const lc::Config& config, std::vector<dou
               std::vector<bool>& converged, bool count_heap,
               const std::vector<lc::Scenario>& scenes = scenarios()) {
   const ex::ExpertPlanner planner(config, std::make_shared<ex::FastLaneChangeSolver>());
-  // The thread's workspace and problem, kept from plan to plan as a caller
+  // The thread's workspace and memory, kept from plan to plan as a caller
   // that plans one scene after another keeps them (the same plans as without).
   const auto workspace = planner.solver().make_workspace();
-  ex::LaneChangeQp problem;
+  ex::PlanMemory memory;
   ex::PlanHints hints;
   hints.workspace = workspace.get();
-  hints.problem = &problem;
+  hints.memory = &memory;
   std::size_t i = 0;
   for (auto _ : state) {
     const auto& s = scenes[i % scenes.size()];

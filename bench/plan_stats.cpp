@@ -55,13 +55,13 @@ int main(int argc, char** argv) {
   const lc::ScenarioSampler sampler(config, 2026);
   const ex::ExpertPlanner planner(config, std::make_shared<ex::FastLaneChangeSolver>());
   Totals totals;
-  // One workspace and problem for every plan, as a thread that plans one
+  // One workspace and memory for every plan, as a thread that plans one
   // scene after another keeps them.
   const auto workspace = planner.solver().make_workspace();
-  ex::LaneChangeQp problem;
+  ex::PlanMemory memory;
   ex::PlanHints hints;
   hints.workspace = workspace.get();
-  hints.problem = &problem;
+  hints.memory = &memory;
   for (int i = 0; i < count; ++i) {
     const lc::Scenario scene = sampler.sample(static_cast<std::uint64_t>(i));
     const double start = thread_cpu_ms();

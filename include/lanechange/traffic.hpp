@@ -82,7 +82,12 @@ class TrafficModel {
   /// by traffic.replay_prediction (a planner's prediction, the default).
   enum class Records { Predict, Replay };
 
+  /// A model of no cars, to be reset() to a scene.
+  TrafficModel() = default;
   TrafficModel(const Scenario& scenario, const Config& config, Records records = Records::Predict);
+  /// The model of `scenario` at t = 0, as the constructor makes it; a model
+  /// reset to scenes of no more cars than before allocates nothing.
+  void reset(const Scenario& scenario, const Config& config, Records records = Records::Predict);
 
   /// Advances every car by dt, each by its own behavior; a replayed car to
   /// its record's state at the new time, whatever is ahead. An IDM car follows
@@ -122,13 +127,13 @@ class TrafficModel {
   [[nodiscard]] double acceleration_of(CarIndex which, const EgoFootprint& ego, double dt);
   void advance_ballistic(CarState& car, double dt) const;
 
-  double lane_width_;
+  double lane_width_ = 0.0;
   VehicleSize vehicle_;  ///< the ego's body
   IdmParameters idm_;
-  double speed_cap_;  ///< +infinity without a cap
-  TrafficIntegration integration_;
+  double speed_cap_ = 0.0;  ///< +infinity without a cap
+  TrafficIntegration integration_ = TrafficIntegration::Ballistic;
   TrafficSettings settings_;
-  double max_decel_;  ///< +infinity without a limit
+  double max_decel_ = 0.0;  ///< +infinity without a limit
   // Per car, in the scene's order; sized once.
   std::vector<Behavior> behavior_;
   std::vector<double> lane_center_;
@@ -179,5 +184,10 @@ struct TrafficPrediction {
 [[nodiscard]] TrafficPrediction predict_traffic(
     const Scenario& scenario, const Config& config, int steps, double dt,
     const std::vector<EgoFootprint>* ego_path = nullptr);
+/// The same into `out`, with `model` reset to the scene: kept by a caller
+/// across predictions of no more cars and steps, they allocate nothing.
+void predict_traffic(const Scenario& scenario, const Config& config, int steps, double dt,
+                     const std::vector<EgoFootprint>* ego_path, TrafficModel& model,
+                     TrafficPrediction& out);
 
 }  // namespace lanechange

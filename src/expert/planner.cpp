@@ -36,11 +36,9 @@ double elapsed_ms(Clock::time_point since) {
   return std::chrono::duration<double, std::milli>(Clock::now() - since).count();
 }
 
-std::vector<EgoFootprint> footprint_of(const Iterate& path) {
-  std::vector<EgoFootprint> out;
-  out.reserve(path.states.size());
+void footprint_of(const Iterate& path, std::vector<EgoFootprint>& out) {
+  out.clear();
   for (const State& z : path.states) out.push_back({z[kX], z[kY], z[kV]});
-  return out;
 }
 
 double largest_position_change(const Iterate& a, const Iterate& b) {
@@ -88,7 +86,7 @@ struct RoundContext {
   const std::vector<int>* first_modes;  ///< lane modes to try first in round 1 (or none)
   const Gap* only_gap;                  ///< the one gap to plan through (or none)
   bool first_point_is_warm_start;       ///< round 1 then warm-starts each gap on its own
-  LaneChangeQp* qp;                     ///< each gap's problem in turn, built in place
+  PlanMemory& memory;                   ///< each gap's problem and prediction, built in place
 };
 
 // Keeps the round's solution within `radius` of the linearization point in x
@@ -109,9 +107,11 @@ void restrict_to_box(LaneChangeQp& qp, const Iterate& point, double radius) {
 // The cars as a round linearized about `point` sees them, into `prediction`:
 // again only where they react to the ego.
 void predict_along(const Scenario& scenario, const Config& config, int predicted_steps, double dt,
-                   const Iterate& point, TrafficPrediction& prediction) {
+                   const Iterate& point, PlanMemory& memory, TrafficPrediction& prediction) {
   if (traffic_reacts(scenario, config)) {
-    prediction = prediction_along(scenario, config, predicted_steps, dt, point);
+    footprint_of(point, memory.ego_path);
+    predict_traffic(scenario, config, predicted_steps, dt, &memory.ego_path, memory.traffic,
+                    prediction);
   }
 }
 
@@ -185,31 +185,25 @@ void add_work(LaneChangeSolution& total, const LaneChangeSolution& part) {
   total.solve_ms += part.solve_ms;
 }
 
-// What one gap's solve leaves: its solution and the cars as it saw them (its
-// problem stays in the context's qp until the next gap's).
-struct GapSolve {
-  LaneChangeSolution solution;
-  TrafficPrediction prediction;
-};
-
 // The gap's MIQP linearized about `point`, the cars re-predicted along it when
 // they react to the ego, solved within `radius` of it when finite, cut off at
-// `cutoff`.
-GapSolve solve_gap(const RoundContext& c, const Gap& gap, const Iterate& point, double radius,
-                   double cutoff, const ExpertResult& result, const TrafficPrediction& base) {
-  GapSolve out;
-  out.prediction = base;
-  predict_along(c.scenario, c.config, c.predicted_steps, c.dt, point, out.prediction);
-  LaneChangeQp& qp = *c.qp;
-  build_lane_change_qp(c.scenario, c.config, point, out.prediction, gap, qp);
+// `cutoff`. Its problem and the cars as it saw them stay in the context's
+// memory until the next gap's.
+LaneChangeSolution solve_gap(const RoundContext& c, const Gap& gap, const Iterate& point,
+                             double radius, double cutoff, const ExpertResult& result) {
+  PlanMemory& memory = c.memory;
+  memory.gap_cars = memory.round_start;
+  predict_along(c.scenario, c.config, c.predicted_steps, c.dt, point, memory, memory.gap_cars);
+  LaneChangeQp& qp = memory.problem;
+  build_lane_change_qp(c.scenario, c.config, point, memory.gap_cars, gap, qp);
   if (std::isfinite(radius)) restrict_to_box(qp, point, radius);
   const std::vector<int> mode_hint = mode_hint_for(c, result, qp, point);
   MiqpSettings settings;
   settings.time_limit_s = c.time_limit_s - elapsed_ms(c.start) / 1000.0;
   settings.qp_iteration_limit = c.qp_iteration_limit - *c.qp_iterations_spent;
   settings.objective_cutoff = cutoff;
-  out.solution = c.solver.solve(qp, settings, {c.workspace, &mode_hint, &point.controls});
-  *c.qp_iterations_spent += out.solution.qp_iterations;
+  LaneChangeSolution out = c.solver.solve(qp, settings, {c.workspace, &mode_hint, &point.controls});
+  *c.qp_iterations_spent += out.qp_iterations;
   return out;
 }
 
@@ -243,19 +237,19 @@ RoundSolution solve_round(const RoundContext& c, const Iterate& point, double ra
                             " interior-point iterations are spent";
     return best;
   }
-  const TrafficPrediction base = result.prediction;
+  c.memory.round_start = result.prediction;
   LaneChangeSolution work;
   const std::vector<Gap> gaps = gaps_in_order(c, result, point);
   // The least bound over the gaps, for a round that a budget cuts.
   double bound = kInfinity;
   for (const Gap& gap : gaps) {
-    const Iterate own_point =
-        warm_start_per_gap ? warm_start(c.scenario, c.config, base, gap) : Iterate{};
+    const Iterate own_point = warm_start_per_gap
+                                  ? warm_start(c.scenario, c.config, c.memory.round_start, gap)
+                                  : Iterate{};
     const double cutoff =
         best.solution.has_solution() ? cutoff_below(best.solution.objective) : kInfinity;
-    GapSolve g =
-        solve_gap(c, gap, warm_start_per_gap ? own_point : point, radius, cutoff, result, base);
-    const LaneChangeSolution& s = g.solution;
+    LaneChangeSolution s =
+        solve_gap(c, gap, warm_start_per_gap ? own_point : point, radius, cutoff, result);
     add_work(work, s);
     const bool better = s.status == MiqpStatus::Optimal && s.has_solution() &&
                         (!best.solution.has_solution() || s.objective < best.solution.objective);
@@ -264,13 +258,13 @@ RoundSolution solve_round(const RoundContext& c, const Iterate& point, double ra
     if (s.status != MiqpStatus::Infeasible) bound = std::min(bound, s.best_bound);
     if (failed && &gap != &gaps.back()) bound = -kInfinity;  // gaps left unsolved
     if (better || failed) {
-      auto occupancy = occupancy_of(*c.qp, s.modes);
-      best = {std::move(g.solution), std::move(occupancy), gap};
-      result.prediction = std::move(g.prediction);
+      auto occupancy = occupancy_of(c.memory.problem, s.modes);
+      best = {std::move(s), std::move(occupancy), gap};
+      std::swap(result.prediction, c.memory.gap_cars);
       if (failed) break;
     } else if (!best.solution.has_solution()) {
       // A round that finds nothing reports what its first gap saw.
-      if (gap == gaps.front()) result.prediction = std::move(g.prediction);
+      if (gap == gaps.front()) std::swap(result.prediction, c.memory.gap_cars);
       if (gaps.size() == 1) best.solution.message = s.message;
     }
   }
@@ -509,7 +503,8 @@ TrafficPrediction prediction_along(const Scenario& scenario, const Config& confi
   if (!traffic_reacts(scenario, config)) {
     return predict_traffic(scenario, config, predicted_steps, dt);
   }
-  const auto ego_path = footprint_of(point);
+  std::vector<EgoFootprint> ego_path;
+  footprint_of(point, ego_path);
   return predict_traffic(scenario, config, predicted_steps, dt, &ego_path);
 }
 
@@ -523,7 +518,8 @@ ExpertResult ExpertPlanner::plan(const Scenario& scenario, const PlanLimits& lim
   const auto nodes = static_cast<std::size_t>(scenario.steps) + 1;
   const bool modes_fit = hints.modes != nullptr && hints.modes->size() == nodes;
   long qp_iterations_spent = 0;
-  LaneChangeQp own_problem;
+  std::unique_ptr<PlanMemory> own_memory;
+  if (hints.memory == nullptr) own_memory = std::make_unique<PlanMemory>();
   const RoundContext context{scenario,
                              config,
                              *solver_,
@@ -537,9 +533,10 @@ ExpertResult ExpertPlanner::plan(const Scenario& scenario, const PlanLimits& lim
                              modes_fit ? hints.modes : nullptr,
                              hints.gap,
                              !hint_path_fits(scenario, hints),
-                             hints.problem != nullptr ? hints.problem : &own_problem};
+                             hints.memory != nullptr ? *hints.memory : *own_memory};
   ExpertResult result;
-  result.prediction = predict_traffic(scenario, config, context.predicted_steps, dt);
+  predict_traffic(scenario, config, context.predicted_steps, dt, nullptr, context.memory.traffic,
+                  result.prediction);
   Iterate previous;
   plain_rounds(context, first_point(scenario, config, hints, result.prediction), result, previous,
                hints.path_is_plan && hint_path_fits(scenario, hints));
@@ -565,7 +562,8 @@ LinearizedRound ExpertPlanner::first_round(const Scenario& scenario, const PlanH
   LinearizedRound out;
   out.point =
       hint_path_fits(scenario, hints) ? *hints.path : warm_start(scenario, config, prediction, gap);
-  predict_along(scenario, config, predicted_steps, dt, out.point, prediction);
+  PlanMemory memory;
+  predict_along(scenario, config, predicted_steps, dt, out.point, memory, prediction);
   out.qp = build_lane_change_qp(scenario, config, out.point, prediction, gap);
   return out;
 }

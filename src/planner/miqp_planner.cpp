@@ -108,7 +108,7 @@ std::string MiqpSession::replan(const Observation& o) {
     hints = {&guess, &modes, true};
     hints.last_gap = &plan_gap_;
   }
-  hints.problem = &problem_;
+  hints.memory = &memory_;
   if (workspace_) {
     workspace_->advance(o.step - workspace_step_);
     workspace_step_ = o.step;

@@ -60,8 +60,8 @@ class MiqpSession final : public PlannerSession {
   std::vector<int> modes_;
   int plan_step_ = 0;
   std::unique_ptr<expert::LaneChangeWorkspace> workspace_;
-  int workspace_step_ = 0;        ///< the step of the last re-plan that used workspace_
-  expert::LaneChangeQp problem_;  ///< where every re-plan builds its problems (PlanHints::problem)
+  int workspace_step_ = 0;     ///< the step of the last re-plan that used workspace_
+  expert::PlanMemory memory_;  ///< where every re-plan builds and predicts (PlanHints::memory)
   double last_plan_ms_ = 0.0;
   expert::PlanStatus last_status_ = expert::PlanStatus::Converged;
   expert::GapFrame plan_gap_;

@@ -102,7 +102,7 @@ CandidateOutcome StrategyQpPlanner::solve_candidate(const Scenario& scene,
   const auto start = Clock::now();
   expert::PlanHints through{hints.path, &modes, hints.path_is_plan, hints.workspace};
   through.gap = &gap;
-  through.problem = hints.problem;
+  through.memory = hints.memory;
   result = fixed_.plan(scene, limits, through);
   CandidateOutcome out;
   out.rounds = result.iterations();
@@ -470,7 +470,7 @@ StrategyPlan StrategyQpPlanner::plan(const Scenario& scene, const expert::PlanLi
     // (only what the candidates left of the limit: a step budget is one budget).
     expert::PlanHints exact_hints{hints.path, rescued_hint.empty() ? nullptr : &rescued_hint,
                                   hints.path_is_plan};
-    exact_hints.problem = hints.problem;
+    exact_hints.memory = hints.memory;
     out.result = exact_.plan(scene, left_of(limits, start, out.qp_iterations), exact_hints);
     out.qp_iterations += qp_iterations_of(out.result);
   }

@@ -124,27 +124,33 @@ bool traffic_reacts(const Scenario& scenario, const Config& config) {
   });
 }
 
-TrafficModel::TrafficModel(const Scenario& scenario, const Config& config, Records records)
-    : lane_width_(scenario.lane_width),
-      vehicle_(scenario.vehicle),
-      idm_(scenario.idm),
-      speed_cap_(config.traffic_max_speed.value_or(std::numeric_limits<double>::infinity())),
-      integration_(config.traffic_integration),
-      settings_(config.traffic),
-      max_decel_(config.traffic.max_decel.value_or(std::numeric_limits<double>::infinity())),
-      accel_(scenario.car_count(), 0.0),
-      follows_(scenario.car_count(), 0),
-      followed_ego_(scenario.car_count(), 0),
-      order_(scenario.car_count()),
-      rank_(scenario.car_count()) {
+TrafficModel::TrafficModel(const Scenario& scenario, const Config& config, Records records) {
+  reset(scenario, config, records);
+}
+
+void TrafficModel::reset(const Scenario& scenario, const Config& config, Records records) {
+  lane_width_ = scenario.lane_width;
+  vehicle_ = scenario.vehicle;
+  idm_ = scenario.idm;
+  speed_cap_ = config.traffic_max_speed.value_or(std::numeric_limits<double>::infinity());
+  integration_ = config.traffic_integration;
+  settings_ = config.traffic;
+  max_decel_ = config.traffic.max_decel.value_or(std::numeric_limits<double>::infinity());
   const std::size_t n = scenario.car_count();
-  behavior_.reserve(n);
-  lane_center_.reserve(n);
-  length_.reserve(n);
-  width_.reserve(n);
-  behavior_accel_.reserve(n);
-  cars_.reserve(n);
-  records_.resize(n);
+  accel_.assign(n, 0.0);
+  follows_.assign(n, 0);
+  followed_ego_.assign(n, 0);
+  order_.resize(n);
+  rank_.resize(n);
+  behavior_.clear();
+  lane_center_.clear();
+  length_.clear();
+  width_.clear();
+  behavior_accel_.clear();
+  cars_.clear();
+  records_.assign(n, std::nullopt);
+  longest_ = 0.0;
+  time_ = 0.0;
   for (CarIndex i = 0; i < n; ++i) {
     const OtherCar& car = scenario.cars[i];
     if (records == Records::Replay && car.behavior == Behavior::Replay && car.record) {
@@ -274,14 +280,24 @@ void TrafficModel::step(double dt, const EgoFootprint& ego) {
 
 TrafficPrediction predict_traffic(const Scenario& scenario, const Config& config, int steps,
                                   double dt, const std::vector<EgoFootprint>* ego_path) {
-  TrafficModel model(scenario, config);
+  TrafficModel model;
   TrafficPrediction out;
+  predict_traffic(scenario, config, steps, dt, ego_path, model, out);
+  return out;
+}
+
+void predict_traffic(const Scenario& scenario, const Config& config, int steps, double dt,
+                     const std::vector<EgoFootprint>* ego_path, TrafficModel& model,
+                     TrafficPrediction& out) {
+  model.reset(scenario, config);
   out.dt = dt;
   out.cars.resize(scenario.car_count());
   for (auto& track : out.cars) {
-    track.x.reserve(steps + 1);
-    track.v.reserve(steps + 1);
-    track.a.reserve(steps + 1);
+    for (auto* series : {&track.x, &track.v, &track.a}) {
+      series->clear();
+      series->reserve(steps + 1);
+    }
+    track.present.clear();
   }
   auto record = [&] {
     for (CarIndex i = 0; i < out.cars.size(); ++i) {
@@ -298,7 +314,6 @@ TrafficPrediction predict_traffic(const Scenario& scenario, const Config& config
     record();
   }
   for (auto& track : out.cars) track.a.push_back(track.a.empty() ? 0.0 : track.a.back());
-  return out;
 }
 
 }  // namespace lanechange

@@ -20,6 +20,7 @@
 #include "lanechange/expert/lane_change_solver.hpp"
 #include "lanechange/expert/miqp.hpp"
 #include "lanechange/scenario.hpp"
+#include "lanechange/traffic.hpp"
 #include "lanechange/trajectory.hpp"
 
 namespace lanechange::expert {
@@ -91,6 +92,17 @@ struct PlanLimits {
 /// Where to start when a good guess is at hand (a re-plan in closed loop
 /// starts from the last plan shifted by a step). Ignored when the sizes do
 /// not fit the scenario's steps.
+/// The memory a plan builds its problems and predicts the cars in, kept by
+/// the caller across plans as PlanHints::workspace is: a thread's later plans
+/// then reuse it instead of allocating their own.
+struct PlanMemory {
+  LaneChangeQp problem;                ///< each gap's problem in turn, built in place
+  TrafficModel traffic;                ///< the model each prediction resets
+  std::vector<EgoFootprint> ego_path;  ///< the path the cars react to in a prediction
+  TrafficPrediction round_start;       ///< the cars as a round begins
+  TrafficPrediction gap_cars;          ///< the cars as the gap being solved sees them
+};
+
 struct PlanHints {
   const Iterate* path = nullptr;            ///< the first linearization point
   const std::vector<int>* modes = nullptr;  ///< lane modes per node, for the first round
@@ -112,10 +124,9 @@ struct PlanHints {
   /// planner that replays the modes replays them into it. The exact search
   /// tries every allowed gap and needs none.
   const GapFrame* last_gap = nullptr;
-  /// Where the rounds build each gap's problem, kept by the caller across
-  /// plans as `workspace` is: a thread's later plans then reuse its memory.
-  /// nullptr: one per plan.
-  LaneChangeQp* problem = nullptr;
+  /// Where the rounds build each gap's problem and predict the cars, kept by
+  /// the caller across plans as `workspace` is. nullptr: one per plan.
+  PlanMemory* memory = nullptr;
 };
 
 /// The cars as a round linearized about `point` sees them: predicted along
