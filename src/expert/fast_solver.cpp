@@ -240,8 +240,15 @@ void build_node(const LaneChangeQp& qp, const std::vector<int>& modes, unsigned 
   }
 }
 
-Iterate path_of(const QpWorkspace& qp_ws, int steps) {
+// The node's solution, in a path the search is done with where there is one.
+Iterate path_of(const QpWorkspace& qp_ws, int steps, FastWorkspace& ws) {
   Iterate path;
+  if (!ws.spare_paths.empty()) {
+    path = std::move(ws.spare_paths.back());
+    ws.spare_paths.pop_back();
+  }
+  path.states.clear();
+  path.controls.clear();
   path.states.reserve(steps + 1);
   path.controls.reserve(steps);
   const auto& w = qp_ws.solution();
@@ -303,7 +310,7 @@ NodeOutcome solve_node_with(const LaneChangeQp& qp, const std::vector<int>& mode
   if (r.status != QpStatus::Optimal && r.status != QpStatus::Coarse) return out;
   out.feasible = true;
   out.coarse = r.status == QpStatus::Coarse;
-  out.path = path_of(ws.qp_workspace, qp.steps);
+  out.path = path_of(ws.qp_workspace, qp.steps, ws);
   // The next node is most often a child or sibling of this one: start there.
   ws.start_controls = out.path.controls;
   out.objective = qp.objective(out.path);
@@ -326,6 +333,7 @@ NodeOutcome solve_node(const LaneChangeQp& qp, const std::vector<int>& modes, Fa
   // interior-point method takes its whole iteration limit to give up.
   if (!modes_can_hold(qp, modes)) return out;
   for (;;) {
+    ws.recycle(out.path);
     out = solve_node_with(qp, modes, ws.needed_bounds, cutoff, precision, ws);
     iterations += out.iterations;
     const unsigned broken = out.feasible ? broken_bounds(qp, out.path) & ~ws.needed_bounds : 0U;
@@ -583,11 +591,14 @@ void improve_switches(const LaneChangeQp& qp, std::vector<int> modes, double obj
     const double cap = std::min(objective, prune_level());
     NodeOutcome o = solve_node(qp, trial, ws, cap);
     ++nodes;
-    if (!o.feasible || o.objective >= cap - 1e-12) return false;
-    objective = o.objective;
-    modes = trial;
-    accept(o);
-    return true;
+    const bool better = o.feasible && o.objective < cap - 1e-12;
+    if (better) {
+      objective = o.objective;
+      modes = trial;
+      accept(o);
+    }
+    ws.recycle(o.path);
+    return better;
   };
   for (bool improved = true; improved && !settled();) {
     improved = false;
@@ -667,7 +678,7 @@ class Search {
       : qp_(qp), settings_(settings), ws_(ws), start_(start), out_(out) {}
 
   void find_incumbent(const NodeOutcome& root, const SolveHints& hints);
-  bool branch_and_bound(const std::vector<int>& root_modes, NodeOutcome root);
+  bool branch_and_bound(const std::vector<int>& root_modes, NodeOutcome& root);
   void finish();
 
  private:
@@ -685,7 +696,7 @@ class Search {
   }
   void accept(NodeOutcome& o);
   bool stopped_at_limit(double pending_bound);
-  void explore(const std::vector<int>& modes, NodeOutcome o, double inherited_bound);
+  void explore(const std::vector<int>& modes, NodeOutcome& o, double inherited_bound);
   void push_children(const std::vector<int>& modes, int k, const State& relaxed, double bound);
 
   const LaneChangeQp& qp_;
@@ -701,7 +712,7 @@ class Search {
 void Search::accept(NodeOutcome& o) {
   if (o.objective < incumbent_ && o.objective < settings_.objective_cutoff) {
     incumbent_ = o.objective;
-    out_.path = std::move(o.path);
+    std::swap(out_.path, o.path);
     out_.objective = incumbent_;
   }
 }
@@ -732,9 +743,11 @@ void Search::find_incumbent(const NodeOutcome& root, const SolveHints& hints) {
     if (!complete(qp_, modes) || !reachable(ws_, modes)) continue;
     NodeOutcome o = solve_node(qp_, modes, ws_);
     ++out_.nodes;
-    if (!o.feasible) continue;
-    objective = o.objective;
-    accept(o);
+    if (o.feasible) {
+      objective = o.objective;
+      accept(o);
+    }
+    ws_.recycle(o.path);
   }
   // The better start first: its switches are likely nearer the optimum.
   std::sort(starts.begin(), starts.end(),
@@ -747,7 +760,7 @@ void Search::find_incumbent(const NodeOutcome& root, const SolveHints& hints) {
 
 // Depth first from the root, best child first. True when the search ran to
 // its end; false when a limit stopped it, with the solution filled in.
-bool Search::branch_and_bound(const std::vector<int>& root_modes, NodeOutcome root) {
+bool Search::branch_and_bound(const std::vector<int>& root_modes, NodeOutcome& root) {
   for (OpenNode& left : ws_.stack) ws_.spare_modes.push_back(std::move(left.modes));
   ws_.stack.clear();
   numerical_trouble_ = root.numerical_failure;
@@ -755,7 +768,8 @@ bool Search::branch_and_bound(const std::vector<int>& root_modes, NodeOutcome ro
   // The root's QP is solved already, but the limits hold for it as for any
   // node: the incumbent search may have used up the time.
   if (stopped_at_limit(root.objective)) return false;
-  explore(root_modes, std::move(root), -kInfinity);
+  explore(root_modes, root, -kInfinity);
+  ws_.recycle(root.path);
   while (!ws_.stack.empty()) {
     if (stopped_at_limit(kInfinity)) return false;
     OpenNode node = std::move(ws_.stack.back());
@@ -763,7 +777,8 @@ bool Search::branch_and_bound(const std::vector<int>& root_modes, NodeOutcome ro
     NodeOutcome o =
         solve_node(qp_, node.modes, ws_, prune_level(), NodePrecision::RoughBelowCutoff);
     ++out_.nodes;
-    explore(node.modes, std::move(o), node.bound);
+    explore(node.modes, o, node.bound);
+    ws_.recycle(o.path);
     ws_.spare_modes.push_back(std::move(node.modes));
   }
   return true;
@@ -789,12 +804,14 @@ bool Search::stopped_at_limit(double pending_bound) {
 
 // Prunes the node, takes its point as an incumbent when that meets some mode
 // at every node, or branches on it.
-void Search::explore(const std::vector<int>& modes, NodeOutcome o, double inherited_bound) {
+// The caller gives o's path back once it returns.
+void Search::explore(const std::vector<int>& modes, NodeOutcome& o, double inherited_bound) {
   numerical_trouble_ = numerical_trouble_ || o.numerical_failure;
   cut_off_ = cut_off_ || o.cut_off || (o.feasible && o.objective >= settings_.objective_cutoff);
   if (!o.feasible || o.objective >= prune_level()) return;
   int k = branching_node(qp_, ws_, modes, o.path, o.coarse ? kCoarseViolation : kModeTolerance);
   if (k < 0 && o.coarse) {  // maybe a leaf: only a solution can tell
+    ws_.recycle(o.path);
     o = solve_node(qp_, modes, ws_, prune_level());
     numerical_trouble_ = numerical_trouble_ || o.numerical_failure;
     cut_off_ = cut_off_ || o.cut_off;
@@ -880,7 +897,8 @@ LaneChangeSolution FastLaneChangeSolver::solve(const LaneChangeQp& qp, const Miq
   Search search(qp, settings, ws, start, out);
   if (root.feasible) search.find_incumbent(root, hints);
   out.incumbent_qps = out.nodes;
-  if (search.branch_and_bound(root_modes, std::move(root))) search.finish();
+  if (search.branch_and_bound(root_modes, root)) search.finish();
+  ws.recycle(root.path);
   return out;
 }
 

@@ -32,6 +32,13 @@ struct FastWorkspace final : LaneChangeWorkspace {
   // search allocates none once the stack has been as deep before.
   std::vector<std::vector<int>> spare_modes;
   std::vector<std::pair<double, int>> child_order;  // push_children's, kept for its memory
+  // Paths of node solutions the search is done with, for the next nodes'.
+  std::vector<Iterate> spare_paths;
+  // Gives a node's path back for the next node to fill.
+  void recycle(Iterate& path) {
+    if (path.states.capacity() > 0) spare_paths.push_back(std::move(path));
+    path = Iterate{};
+  }
   std::vector<Control> start_controls;
   long iterations = 0;         // of the interior-point method, for the solution's statistics
   unsigned needed_bounds = 0;  // state components whose bounds this round's QPs carry
