@@ -275,19 +275,29 @@ Gap paper_gap(const Scenario& s) {
 }
 
 std::vector<Gap> target_lane_gaps(const Scenario& s, GapChoice choice) {
-  if (choice == GapChoice::Fixed) return {paper_gap(s)};
+  std::vector<Gap> gaps;
+  target_lane_gaps(s, choice, gaps);
+  return gaps;
+}
+
+void target_lane_gaps(const Scenario& s, GapChoice choice, std::vector<Gap>& out) {
+  if (choice == GapChoice::Fixed) {
+    out.resize(1);
+    out[0] = paper_gap(s);
+    return;
+  }
   std::vector<CarIndex> lane;
   for (CarIndex c = 0; c < s.car_count(); ++c) {
     if (s.cars[c].lane == Lane::Target) lane.push_back(c);
   }
   std::stable_sort(lane.begin(), lane.end(),
                    [&s](CarIndex a, CarIndex b) { return s.car(a).x < s.car(b).x; });
-  std::vector<Gap> gaps;
+  out.resize(lane.size() + 1);
   for (std::size_t split = 0; split <= lane.size(); ++split) {
     const auto at = lane.begin() + static_cast<std::ptrdiff_t>(split);
-    gaps.push_back({{lane.begin(), at}, {at, lane.end()}});
+    out[split].behind.assign(lane.begin(), at);
+    out[split].ahead.assign(at, lane.end());
   }
-  return gaps;
 }
 
 GapAim aim_into(const Scenario& s, const Config& c, const TrafficPrediction& p, const Gap& gap,

@@ -150,10 +150,15 @@ bool ends_in(const Gap& gap, const Iterate& path, const TrafficPrediction& p) {
 
 // The allowed gaps, the likeliest first so that its optimum cuts the others
 // off early: the last round's, else the one the linearization point ends in.
-std::vector<Gap> gaps_in_order(const RoundContext& c, const ExpertResult& result,
-                               const Iterate& point) {
-  if (c.only_gap != nullptr) return {*c.only_gap};
-  std::vector<Gap> gaps = target_lane_gaps(c.scenario, c.config.expert.gap);
+const std::vector<Gap>& gaps_in_order(const RoundContext& c, const ExpertResult& result,
+                                      const Iterate& point) {
+  std::vector<Gap>& gaps = c.memory.gaps;
+  if (c.only_gap != nullptr) {
+    gaps.resize(1);
+    gaps[0] = *c.only_gap;
+    return gaps;
+  }
+  target_lane_gaps(c.scenario, c.config.expert.gap, gaps);
   const bool have_last = !result.path.states.empty();
   const auto first = std::find_if(gaps.begin(), gaps.end(), [&](const Gap& g) {
     return have_last ? g == result.gap : ends_in(g, point, result.prediction);
@@ -239,7 +244,7 @@ RoundSolution solve_round(const RoundContext& c, const Iterate& point, double ra
   }
   c.memory.round_start = result.prediction;
   LaneChangeSolution work;
-  const std::vector<Gap> gaps = gaps_in_order(c, result, point);
+  const std::vector<Gap>& gaps = gaps_in_order(c, result, point);
   // The least bound over the gaps, for a round that a budget cuts.
   double bound = kInfinity;
   for (const Gap& gap : gaps) {

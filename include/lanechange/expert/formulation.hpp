@@ -114,6 +114,8 @@ struct Gap {
 /// the paper's alone (fixed), or one per place between, ahead of and behind
 /// the target-lane cars as they stand at t = 0 (best).
 [[nodiscard]] std::vector<Gap> target_lane_gaps(const Scenario& scenario, GapChoice choice);
+/// The same into `out`, whose gaps keep their lists' memory.
+void target_lane_gaps(const Scenario& scenario, GapChoice choice, std::vector<Gap>& out);
 /// Where a plan into `gap` aims at prediction node `node`: behind the gap's
 /// car ahead by its safe distance (expert.aim_behind_target; else at it), at
 /// that car's speed and acceleration; ahead of the car behind where the gap

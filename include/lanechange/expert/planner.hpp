@@ -101,6 +101,7 @@ struct PlanMemory {
   std::vector<EgoFootprint> ego_path;  ///< the path the cars react to in a prediction
   TrafficPrediction round_start;       ///< the cars as a round begins
   TrafficPrediction gap_cars;          ///< the cars as the gap being solved sees them
+  std::vector<Gap> gaps;               ///< a round's gaps, in the order it solves them
 };
 
 struct PlanHints {
