@@ -567,8 +567,9 @@ LinearizedRound ExpertPlanner::first_round(const Scenario& scenario, const PlanH
   LinearizedRound out;
   out.point =
       hint_path_fits(scenario, hints) ? *hints.path : warm_start(scenario, config, prediction, gap);
-  PlanMemory memory;
-  predict_along(scenario, config, predicted_steps, dt, out.point, memory, prediction);
+  if (traffic_reacts(scenario, config)) {
+    prediction = prediction_along(scenario, config, predicted_steps, dt, out.point);
+  }
   out.qp = build_lane_change_qp(scenario, config, out.point, prediction, gap);
   return out;
 }
