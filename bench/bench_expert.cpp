@@ -178,19 +178,25 @@ void plan_all(benchmark::State& state, const lc::Config& config, std::vector<dou
   ex::PlanHints hints;
   hints.workspace = workspace.get();
   hints.memory = &memory;
+  ex::ExpertResult result;  // kept too: its lists keep their memory
   std::size_t i = 0;
   for (auto _ : state) {
     const auto& s = scenes[i % scenes.size()];
     const long allocations = g_allocations.load();
     const long bytes = g_bytes.load();
     const double t0 = thread_cpu_ms();
-    auto result = planner.plan(s, {}, hints);
+    planner.plan(s, {}, hints, result);
     benchmark::DoNotOptimize(result);
-    ms.push_back(thread_cpu_ms() - t0);
+    const double plan_ms = thread_cpu_ms() - t0;
+    const long plan_allocations = g_allocations.load() - allocations;
+    const long plan_bytes = g_bytes.load() - bytes;
+    ms.push_back(plan_ms);
     converged.push_back(result.status == ex::PlanStatus::Converged);
-    if (count_heap && i > 0) {  // the target: no allocation once the thread's first plan has set up
-      g_samples.plan_allocations.push_back(g_allocations.load() - allocations);
-      g_samples.plan_bytes.push_back(g_bytes.load() - bytes);
+    // The target: no allocation once the thread has planned scenes of that size
+    // (the first pass over the scenes sets the memory up).
+    if (count_heap && i >= scenes.size()) {
+      g_samples.plan_allocations.push_back(plan_allocations);
+      g_samples.plan_bytes.push_back(plan_bytes);
     }
     ++i;
   }
@@ -322,8 +328,14 @@ void print_summary() {
         quantile(g_samples.eight_car_plan_ms, 1.0), g_samples.eight_car_plan_ms.size(),
         static_cast<long>(std::count(converged.begin(), converged.end(), true)));
   }
-  std::printf("heap per plan: median %.0f allocations, %.0f bytes; process peak RSS %ld KiB\n",
-              median(g_samples.plan_allocations), median(g_samples.plan_bytes), usage.ru_maxrss);
+  std::printf(
+      "heap per plan after the first pass over the scenes: median %.0f allocations, largest "
+      "%.0f, median %.0f bytes; process peak RSS %ld KiB\n",
+      median(g_samples.plan_allocations),
+      quantile(
+          std::vector<double>(g_samples.plan_allocations.begin(), g_samples.plan_allocations.end()),
+          1.0),
+      median(g_samples.plan_bytes), usage.ru_maxrss);
 }
 
 }  // namespace

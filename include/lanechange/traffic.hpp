@@ -8,6 +8,7 @@
 
 #include "lanechange/config.hpp"
 #include "lanechange/scenario.hpp"
+#include "lanechange/spare.hpp"
 
 namespace lanechange {
 
@@ -171,6 +172,12 @@ struct CarTrack {
 struct TrafficPrediction {
   double dt = 0.0;
   std::vector<CarTrack> cars;
+  Spare<CarTrack> spare;  ///< tracks a smaller prediction set aside, with their memory
+  /// `*this = other`, keeping the memory of its tracks (a planner's buffers).
+  void assign(const TrafficPrediction& other) {
+    dt = other.dt;
+    assign_keeping(cars, other.cars, spare);
+  }
   [[nodiscard]] const CarTrack& car(CarIndex which) const { return cars[which]; }
   [[nodiscard]] std::size_t car_count() const { return cars.size(); }
   /// Nodes per track; 0 without cars.

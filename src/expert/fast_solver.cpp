@@ -522,12 +522,11 @@ int branching_node(const LaneChangeQp& qp, const FastWorkspace& ws, const std::v
 }
 
 // The modes that a feasible path satisfies, node by node.
-std::vector<int> modes_of(const LaneChangeQp& qp, const Iterate& path) {
-  std::vector<int> modes(qp.steps + 1, kFree);
+void modes_of(const LaneChangeQp& qp, const Iterate& path, std::vector<int>& modes) {
+  modes.assign(qp.steps + 1, kFree);
   for (int k = 0; k <= qp.steps; ++k) {
     if (!qp.node_modes[k].empty()) modes[k] = qp.best_mode(path, k);
   }
-  return modes;
 }
 
 using Clock = std::chrono::steady_clock;
@@ -579,10 +578,12 @@ bool reachable(const FastWorkspace& ws, const std::vector<int>& modes) {
 // times can be a second or more off), and the search stops as soon as
 // `settled()` says no sequence can beat the incumbent by more than the gap.
 template <class Accept, class Settled, class Level>
-void improve_switches(const LaneChangeQp& qp, std::vector<int> modes, double objective,
+void improve_switches(const LaneChangeQp& qp, const std::vector<int>& start, double objective,
                       FastWorkspace& ws, long& nodes, Accept&& accept, Settled&& settled,
                       Level&& prune_level) {
-  std::vector<int> trial;
+  std::vector<int>& modes = ws.switch_modes;
+  modes.assign(start.begin(), start.end());
+  std::vector<int>& trial = ws.switch_trial;
   auto try_move = [&](int j, int step) {
     if (!move_switch(modes, j, step, trial) || !reachable(ws, trial)) return false;
     // Only a move that could still become the incumbent counts: one above
@@ -625,13 +626,12 @@ void improve_switches(const LaneChangeQp& qp, std::vector<int> modes, double obj
 }
 
 // A complete mode sequence from a path: at each node, the reachable mode it comes closest to.
-std::vector<int> rounded_modes(const LaneChangeQp& qp, const FastWorkspace& ws,
-                               const Iterate& path) {
-  std::vector<int> modes(qp.steps + 1, kFree);
+void rounded_modes(const LaneChangeQp& qp, const FastWorkspace& ws, const Iterate& path,
+                   std::vector<int>& modes) {
+  modes.assign(qp.steps + 1, kFree);
   for (int k = 1; k <= qp.steps; ++k) {
     modes[k] = qp.best_mode(path, k, ws.possible_modes[static_cast<std::size_t>(k)]);
   }
-  return modes;
 }
 
 double least_open_bound(const std::vector<OpenNode>& open) {
@@ -732,29 +732,33 @@ void Search::find_incumbent(const NodeOutcome& root, const SolveHints& hints) {
   };
   auto accept = [this](NodeOutcome& o) { this->accept(o); };
   auto level = [this] { return prune_level(); };
-  std::vector<std::pair<double, std::vector<int>>> starts;
-  std::vector<int> rounded = rounded_modes(qp_, ws_, root.path);
+  // Up to two starts, in the workspace's lists: the hint's modes, and the
+  // rounded root where it differs.
+  auto& starts = ws_.start_modes;
+  std::array<double, 2> objectives{kInfinity, kInfinity};
+  std::size_t count = 0;
   if (hints.modes != nullptr && static_cast<int>(hints.modes->size()) == qp_.steps + 1) {
-    starts.emplace_back(kInfinity, *hints.modes);
+    starts[count++].assign(hints.modes->begin(), hints.modes->end());
   }
-  if (starts.empty() || rounded != starts.front().second) starts.emplace_back(kInfinity, rounded);
-  for (auto& [objective, modes] : starts) {
+  rounded_modes(qp_, ws_, root.path, starts[count]);
+  if (count == 0 || starts[1] != starts[0]) ++count;
+  for (std::size_t i = 0; i < count; ++i) {
     if (settled()) break;
-    if (!complete(qp_, modes) || !reachable(ws_, modes)) continue;
-    NodeOutcome o = solve_node(qp_, modes, ws_);
+    if (!complete(qp_, starts[i]) || !reachable(ws_, starts[i])) continue;
+    NodeOutcome o = solve_node(qp_, starts[i], ws_);
     ++out_.nodes;
     if (o.feasible) {
-      objective = o.objective;
+      objectives[i] = o.objective;
       accept(o);
     }
     ws_.recycle(o.path);
   }
   // The better start first: its switches are likely nearer the optimum.
-  std::sort(starts.begin(), starts.end(),
-            [](const auto& a, const auto& b) { return a.first < b.first; });
-  for (const auto& [objective, modes] : starts) {
-    if (!std::isfinite(objective) || settled()) continue;
-    improve_switches(qp_, modes, objective, ws_, out_.nodes, accept, settled, level);
+  const std::size_t first = count == 2 && objectives[1] < objectives[0] ? 1 : 0;
+  for (std::size_t j = 0; j < count; ++j) {
+    const std::size_t i = j == 0 ? first : 1 - first;
+    if (!std::isfinite(objectives[i]) || settled()) continue;
+    improve_switches(qp_, starts[i], objectives[i], ws_, out_.nodes, accept, settled, level);
   }
 }
 
@@ -797,7 +801,7 @@ bool Search::stopped_at_limit(double pending_bound) {
                             : MiqpStatus::NodeLimit;
   out_.solve_ms = elapsed * 1000.0;
   out_.qp_iterations = ws_.iterations;
-  if (out_.has_solution()) out_.modes = modes_of(qp_, out_.path);
+  if (out_.has_solution()) modes_of(qp_, out_.path, out_.modes);
   out_.best_bound = std::min({out_.objective, pending_bound, least_open_bound(ws_.stack)});
   return true;
 }
@@ -855,7 +859,7 @@ void Search::finish() {
   out_.qp_iterations = ws_.iterations;
   if (out_.has_solution()) {
     out_.status = MiqpStatus::Optimal;
-    out_.modes = modes_of(qp_, out_.path);
+    modes_of(qp_, out_.path, out_.modes);
     // Every node left behind was pruned within the gap of the incumbent.
     out_.best_bound = out_.objective;
     return;
@@ -885,13 +889,21 @@ std::unique_ptr<LaneChangeWorkspace> FastLaneChangeSolver::make_workspace() cons
 
 LaneChangeSolution FastLaneChangeSolver::solve(const LaneChangeQp& qp, const MiqpSettings& settings,
                                                const SolveHints& hints) const {
+  LaneChangeSolution out;
+  solve_into(qp, settings, hints, out);
+  return out;
+}
+
+void FastLaneChangeSolver::solve_into(const LaneChangeQp& qp, const MiqpSettings& settings,
+                                      const SolveHints& hints, LaneChangeSolution& out) const {
   const auto start = Clock::now();
   std::unique_ptr<LaneChangeWorkspace> owned;
   FastWorkspace& ws = workspace_for(hints, owned);
-  LaneChangeSolution out;
+  out.clear();
   ws.iterations = 0;
-  if (!pre_check(qp, hints, options_.reachable_modes, ws, out)) return out;
-  const std::vector<int> root_modes(qp.steps + 1, kFree);
+  if (!pre_check(qp, hints, options_.reachable_modes, ws, out)) return;
+  std::vector<int>& root_modes = ws.root_modes;
+  root_modes.assign(qp.steps + 1, kFree);
   NodeOutcome root = solve_node(qp, root_modes, ws);
   ++out.nodes;
   Search search(qp, settings, ws, start, out);
@@ -899,7 +911,6 @@ LaneChangeSolution FastLaneChangeSolver::solve(const LaneChangeQp& qp, const Miq
   out.incumbent_qps = out.nodes;
   if (search.branch_and_bound(root_modes, root)) search.finish();
   ws.recycle(root.path);
-  return out;
 }
 
 }  // namespace lanechange::expert

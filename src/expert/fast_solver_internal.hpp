@@ -2,6 +2,7 @@
 // The fast solver's node solve, shared with the fixed-mode solver: both solve
 // structured QPs of one round with some lane modes fixed, and one workspace
 // type serves both, so a caller may hand either back-end the other's.
+#include <array>
 #include <utility>
 #include <vector>
 
@@ -32,6 +33,10 @@ struct FastWorkspace final : LaneChangeWorkspace {
   // search allocates none once the stack has been as deep before.
   std::vector<std::vector<int>> spare_modes;
   std::vector<std::pair<double, int>> child_order;  // push_children's, kept for its memory
+  // The rest of a solve's mode lists, kept for their memory: the root's (all
+  // free), the incumbent search's starts and moves, the fixed-mode solve's.
+  std::vector<int> root_modes, switch_modes, switch_trial, fixed_modes;
+  std::array<std::vector<int>, 2> start_modes;
   // Paths of node solutions the search is done with, for the next nodes'.
   std::vector<Iterate> spare_paths;
   // Gives a node's path back for the next node to fill.

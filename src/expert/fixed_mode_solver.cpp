@@ -47,8 +47,15 @@ std::unique_ptr<LaneChangeWorkspace> FixedModeLaneChangeSolver::make_workspace()
 LaneChangeSolution FixedModeLaneChangeSolver::solve(const LaneChangeQp& qp,
                                                     const MiqpSettings& settings,
                                                     const SolveHints& hints) const {
-  const auto start = std::chrono::steady_clock::now();
   LaneChangeSolution out;
+  solve_into(qp, settings, hints, out);
+  return out;
+}
+
+void FixedModeLaneChangeSolver::solve_into(const LaneChangeQp& qp, const MiqpSettings& settings,
+                                           const SolveHints& hints, LaneChangeSolution& out) const {
+  const auto start = std::chrono::steady_clock::now();
+  out.clear();
   out.status = MiqpStatus::Infeasible;
   out.message = unfit_modes(qp, hints.modes);
   if (out.message.empty() && !detail::initial_state_allowed(qp)) {
@@ -57,12 +64,12 @@ LaneChangeSolution FixedModeLaneChangeSolver::solve(const LaneChangeQp& qp,
   if (out.message.empty() && !detail::modes_can_hold(qp, *hints.modes)) {
     out.message = "no reachable state meets the lane modes";
   }
-  if (!out.message.empty()) return out;
+  if (!out.message.empty()) return;
   // A caller's budget already spent (a step's, shared with other solves).
   if (settings.qp_iteration_limit <= 0 || settings.time_limit_s <= 0.0) {
     out.status = settings.qp_iteration_limit <= 0 ? MiqpStatus::WorkLimit : MiqpStatus::TimeLimit;
     out.message = "the budget is spent";
-    return out;
+    return;
   }
   std::unique_ptr<LaneChangeWorkspace> owned;
   detail::FastWorkspace& ws = detail::workspace_for(hints, owned);
@@ -78,7 +85,8 @@ LaneChangeSolution FixedModeLaneChangeSolver::solve(const LaneChangeQp& qp,
   ws.warm_start_qp = true;
   ws.rough_tolerance = settings_.rough_tolerance;
   // Node 0's mode is not a choice (its state is given), so it stays free.
-  std::vector<int> modes = *hints.modes;
+  std::vector<int>& modes = ws.fixed_modes;
+  modes.assign(hints.modes->begin(), hints.modes->end());
   modes[0] = detail::kFreeMode;
   detail::NodeOutcome node = detail::solve_node(
       qp, modes, ws, settings.objective_cutoff,
@@ -88,22 +96,24 @@ LaneChangeSolution FixedModeLaneChangeSolver::solve(const LaneChangeQp& qp,
   out.solve_ms =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   if (node.cut_off) {
+    ws.recycle(node.path);
     out.status = MiqpStatus::Cutoff;
     out.objective = node.objective;
     out.message = "no point is cheaper than the cutoff";
-    return out;
+    return;
   }
   if (!node.feasible) {
+    ws.recycle(node.path);
     out.status = node.numerical_failure ? MiqpStatus::NumericalError : MiqpStatus::Infeasible;
     out.message =
         node.numerical_failure ? "the QP failed" : "the lane modes leave no feasible path";
-    return out;
+    return;
   }
   out.status = MiqpStatus::Optimal;
-  out.path = std::move(node.path);
+  std::swap(out.path, node.path);
+  ws.recycle(node.path);
   out.objective = node.objective;
-  out.modes = *hints.modes;
-  return out;
+  out.modes.assign(hints.modes->begin(), hints.modes->end());
 }
 
 }  // namespace lanechange::expert

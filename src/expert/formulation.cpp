@@ -269,9 +269,15 @@ std::optional<CarIndex> Gap::car_ahead() const {
 
 Gap paper_gap(const Scenario& s) {
   Gap gap;
-  if (s.has(Role::Follower)) gap.behind.push_back(s.index_of(Role::Follower));
-  if (s.has(Role::Target)) gap.ahead.push_back(s.index_of(Role::Target));
+  paper_gap(s, gap);
   return gap;
+}
+
+void paper_gap(const Scenario& s, Gap& out) {
+  out.behind.clear();
+  out.ahead.clear();
+  if (s.has(Role::Follower)) out.behind.push_back(s.index_of(Role::Follower));
+  if (s.has(Role::Target)) out.ahead.push_back(s.index_of(Role::Target));
 }
 
 std::vector<Gap> target_lane_gaps(const Scenario& s, GapChoice choice) {
@@ -280,20 +286,35 @@ std::vector<Gap> target_lane_gaps(const Scenario& s, GapChoice choice) {
   return gaps;
 }
 
-void target_lane_gaps(const Scenario& s, GapChoice choice, std::vector<Gap>& out) {
+void target_lane_gaps(const Scenario& s, GapChoice choice, std::vector<Gap>& out,
+                      Spare<Gap>* spare) {
+  const auto resize = [&](std::size_t n) {
+    if (spare != nullptr) {
+      resize_keeping(out, n, *spare);
+    } else {
+      out.resize(n);
+    }
+  };
   if (choice == GapChoice::Fixed) {
-    out.resize(1);
-    out[0] = paper_gap(s);
+    resize(1);
+    paper_gap(s, out[0]);
     return;
   }
-  std::vector<CarIndex> lane;
+  std::size_t count = 0;
+  for (CarIndex c = 0; c < s.car_count(); ++c) count += s.cars[c].lane == Lane::Target ? 1 : 0;
+  resize(count + 1);
+  // The lane from the back, in the first gap's list (the one ahead of every
+  // car): an insertion sort, stable and without the buffer stable_sort takes.
+  std::vector<CarIndex>& lane = out[0].ahead;
+  lane.clear();
   for (CarIndex c = 0; c < s.car_count(); ++c) {
-    if (s.cars[c].lane == Lane::Target) lane.push_back(c);
+    if (s.cars[c].lane != Lane::Target) continue;
+    auto at = lane.end();
+    while (at != lane.begin() && s.car(*(at - 1)).x > s.car(c).x) --at;
+    lane.insert(at, c);
   }
-  std::stable_sort(lane.begin(), lane.end(),
-                   [&s](CarIndex a, CarIndex b) { return s.car(a).x < s.car(b).x; });
-  out.resize(lane.size() + 1);
-  for (std::size_t split = 0; split <= lane.size(); ++split) {
+  out[0].behind.clear();
+  for (std::size_t split = 1; split <= count; ++split) {
     const auto at = lane.begin() + static_cast<std::ptrdiff_t>(split);
     out[split].behind.assign(lane.begin(), at);
     out[split].ahead.assign(at, lane.end());

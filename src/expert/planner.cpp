@@ -59,16 +59,15 @@ PlanStatus status_of_failed_round(MiqpStatus s) {
   }
 }
 
-std::vector<std::optional<LaneOccupancy>> occupancy_of(const LaneChangeQp& qp,
-                                                       const std::vector<int>& modes) {
-  std::vector<std::optional<LaneOccupancy>> out(modes.size());
+void occupancy_of(const LaneChangeQp& qp, const std::vector<int>& modes,
+                  std::vector<std::optional<LaneOccupancy>>& out) {
+  out.assign(modes.size(), std::nullopt);
   for (std::size_t k = 0; k < modes.size() && k < qp.node_modes.size(); ++k) {
     const auto& choices = qp.node_modes[k];
     if (modes[k] >= 0 && static_cast<std::size_t>(modes[k]) < choices.size()) {
       out[k] = choices[static_cast<std::size_t>(modes[k])].occupancy;
     }
   }
-  return out;
 }
 
 // What every round of one plan shares.
@@ -121,22 +120,21 @@ bool hint_path_fits(const Scenario& scenario, const PlanHints& hints) {
          hints.path->controls.size() == nodes - 1;
 }
 
-// The first linearization point: the hint's path where it fits, else the
-// configured warm start.
-Iterate first_point(const Scenario& scenario, const Config& config, const PlanHints& hints,
-                    const TrafficPrediction& prediction) {
-  return hint_path_fits(scenario, hints) ? *hints.path : warm_start(scenario, config, prediction);
+// The first linearization point, into memory.point: the hint's path where it
+// fits, else the configured warm start.
+void first_point(const Scenario& scenario, const Config& config, const PlanHints& hints,
+                 const TrafficPrediction& prediction, PlanMemory& memory) {
+  if (hint_path_fits(scenario, hints)) {
+    memory.point = *hints.path;
+    return;
+  }
+  paper_gap(scenario, memory.paper_gap);
+  warm_start(scenario, config, prediction, memory.paper_gap, memory.point);
 }
 
 int predicted_steps_of(const Scenario& scenario, const Config& config) {
   return scenario.steps + config.expert.prediction_lead_steps;
 }
-
-struct RoundSolution {
-  LaneChangeSolution solution;
-  std::vector<std::optional<LaneOccupancy>> occupancy;  ///< of the solution's modes
-  Gap gap;                                              ///< the solution's
-};
 
 // True when the path ends between the gap's framing cars as predicted.
 bool ends_in(const Gap& gap, const Iterate& path, const TrafficPrediction& p) {
@@ -158,7 +156,7 @@ const std::vector<Gap>& gaps_in_order(const RoundContext& c, const ExpertResult&
     gaps[0] = *c.only_gap;
     return gaps;
   }
-  target_lane_gaps(c.scenario, c.config.expert.gap, gaps);
+  target_lane_gaps(c.scenario, c.config.expert.gap, gaps, &c.memory.spare_gaps);
   const bool have_last = !result.path.states.empty();
   const auto first = std::find_if(gaps.begin(), gaps.end(), [&](const Gap& g) {
     return have_last ? g == result.gap : ends_in(g, point, result.prediction);
@@ -169,9 +167,9 @@ const std::vector<Gap>& gaps_in_order(const RoundContext& c, const ExpertResult&
 
 // The modes to try first: the previous round's (the warm start's, first),
 // else those the point meets best in this gap's problem.
-std::vector<int> mode_hint_for(const RoundContext& c, const ExpertResult& result,
-                               const LaneChangeQp& qp, const Iterate& point) {
-  std::vector<int> hint = result.modes;
+void mode_hint_for(const RoundContext& c, const ExpertResult& result, const LaneChangeQp& qp,
+                   const Iterate& point, std::vector<int>& hint) {
+  hint = result.modes;
   if (hint.empty() && c.first_modes != nullptr) hint = *c.first_modes;
   if (hint.empty()) {
     hint.assign(qp.steps + 1, -1);
@@ -179,7 +177,6 @@ std::vector<int> mode_hint_for(const RoundContext& c, const ExpertResult& result
       if (!qp.node_modes[k].empty()) hint[k] = qp.best_mode(point, k);
     }
   }
-  return hint;
 }
 
 // Adds a gap's solve to the round's counts.
@@ -192,24 +189,23 @@ void add_work(LaneChangeSolution& total, const LaneChangeSolution& part) {
 
 // The gap's MIQP linearized about `point`, the cars re-predicted along it when
 // they react to the ego, solved within `radius` of it when finite, cut off at
-// `cutoff`. Its problem and the cars as it saw them stay in the context's
-// memory until the next gap's.
-LaneChangeSolution solve_gap(const RoundContext& c, const Gap& gap, const Iterate& point,
-                             double radius, double cutoff, const ExpertResult& result) {
+// `cutoff`, into `out`. Its problem and the cars as it saw them stay in the
+// context's memory until the next gap's.
+void solve_gap(const RoundContext& c, const Gap& gap, const Iterate& point, double radius,
+               double cutoff, const ExpertResult& result, LaneChangeSolution& out) {
   PlanMemory& memory = c.memory;
-  memory.gap_cars = memory.round_start;
+  memory.gap_cars.assign(memory.round_start);
   predict_along(c.scenario, c.config, c.predicted_steps, c.dt, point, memory, memory.gap_cars);
   LaneChangeQp& qp = memory.problem;
   build_lane_change_qp(c.scenario, c.config, point, memory.gap_cars, gap, qp);
   if (std::isfinite(radius)) restrict_to_box(qp, point, radius);
-  const std::vector<int> mode_hint = mode_hint_for(c, result, qp, point);
+  mode_hint_for(c, result, qp, point, memory.mode_hint);
   MiqpSettings settings;
   settings.time_limit_s = c.time_limit_s - elapsed_ms(c.start) / 1000.0;
   settings.qp_iteration_limit = c.qp_iteration_limit - *c.qp_iterations_spent;
   settings.objective_cutoff = cutoff;
-  LaneChangeSolution out = c.solver.solve(qp, settings, {c.workspace, &mode_hint, &point.controls});
+  c.solver.solve_into(qp, settings, {c.workspace, &memory.mode_hint, &point.controls}, out);
   *c.qp_iterations_spent += out.qp_iterations;
-  return out;
 }
 
 // Below `objective` by more than the gap tolerances: what another gap must beat.
@@ -226,9 +222,13 @@ double cutoff_below(double objective) {
 // may be too slow or too fast to linearize a change into this gap. A gap whose
 // solve stops at a limit or fails ends the round with that status. Updates the
 // prediction the result reports.
-RoundSolution solve_round(const RoundContext& c, const Iterate& point, double radius,
-                          ExpertResult& result, bool warm_start_per_gap = false) {
-  RoundSolution best;
+// The round's answer lives in the context's memory (PlanMemory::round) until
+// the next round's.
+const RoundSolution& solve_round(const RoundContext& c, const Iterate& point, double radius,
+                                 ExpertResult& result, bool warm_start_per_gap = false) {
+  RoundSolution& best = c.memory.round;
+  best.solution.clear();
+  best.occupancy.clear();
   best.solution.status = MiqpStatus::Infeasible;
   if (c.time_limit_s - elapsed_ms(c.start) / 1000.0 <= 0.0) {
     // A round begun past the limit would overrun it by a whole MIQP.
@@ -238,23 +238,25 @@ RoundSolution solve_round(const RoundContext& c, const Iterate& point, double ra
   }
   if (*c.qp_iterations_spent >= c.qp_iteration_limit) {
     best.solution.status = MiqpStatus::WorkLimit;
-    best.solution.message = "the plan's " + std::to_string(c.qp_iteration_limit) +
-                            " interior-point iterations are spent";
+    char message[96];
+    std::snprintf(message, sizeof message, "the plan's %ld interior-point iterations are spent",
+                  c.qp_iteration_limit);
+    best.solution.message = message;
     return best;
   }
-  c.memory.round_start = result.prediction;
+  c.memory.round_start.assign(result.prediction);
   LaneChangeSolution work;
   const std::vector<Gap>& gaps = gaps_in_order(c, result, point);
   // The least bound over the gaps, for a round that a budget cuts.
   double bound = kInfinity;
+  LaneChangeSolution& s = c.memory.gap_solution;
   for (const Gap& gap : gaps) {
-    const Iterate own_point = warm_start_per_gap
-                                  ? warm_start(c.scenario, c.config, c.memory.round_start, gap)
-                                  : Iterate{};
+    if (warm_start_per_gap) {
+      warm_start(c.scenario, c.config, c.memory.round_start, gap, c.memory.gap_point);
+    }
     const double cutoff =
         best.solution.has_solution() ? cutoff_below(best.solution.objective) : kInfinity;
-    LaneChangeSolution s =
-        solve_gap(c, gap, warm_start_per_gap ? own_point : point, radius, cutoff, result);
+    solve_gap(c, gap, warm_start_per_gap ? c.memory.gap_point : point, radius, cutoff, result, s);
     add_work(work, s);
     const bool better = s.status == MiqpStatus::Optimal && s.has_solution() &&
                         (!best.solution.has_solution() || s.objective < best.solution.objective);
@@ -263,8 +265,9 @@ RoundSolution solve_round(const RoundContext& c, const Iterate& point, double ra
     if (s.status != MiqpStatus::Infeasible) bound = std::min(bound, s.best_bound);
     if (failed && &gap != &gaps.back()) bound = -kInfinity;  // gaps left unsolved
     if (better || failed) {
-      auto occupancy = occupancy_of(c.memory.problem, s.modes);
-      best = {std::move(s), std::move(occupancy), gap};
+      std::swap(best.solution, s);
+      occupancy_of(c.memory.problem, best.solution.modes, best.occupancy);
+      best.gap = gap;
       std::swap(result.prediction, c.memory.gap_cars);
       if (failed) break;
     } else if (!best.solution.has_solution()) {
@@ -313,21 +316,29 @@ void fail_round(ExpertResult& result, const RoundSolution& round) {
       solution.status == MiqpStatus::TimeLimit || solution.status == MiqpStatus::WorkLimit;
   if (budget && solution.has_solution()) adopt(result, round);
   result.status = status_of_failed_round(solution.status);
-  result.reason = "round " + std::to_string(result.iterations()) + ": " +
-                  std::string(lanechange::expert::to_string(solution.status)) +
-                  (solution.message.empty() ? "" : " (" + solution.message + ")");
+  char head[64];
+  std::snprintf(head, sizeof head, "round %d: ", result.iterations());
+  result.reason = head;
+  result.reason += lanechange::expert::to_string(solution.status);
+  if (!solution.message.empty()) {
+    result.reason += " (";
+    result.reason += solution.message;
+    result.reason += ')';
+  }
 }
 
 // The paper's successive linearization. Returns with a final status, or with
 // Cycling or IterationLimit and `previous` holding the linearization point of
 // the last round (the trust region starts from there). With `point_is_plan`
 // (PlanHints::path_is_plan) the first round may converge on `point`.
-void plain_rounds(const RoundContext& c, Iterate point, ExpertResult& result, Iterate& previous,
-                  bool point_is_plan) {
+// The rounds start from the context's memory.point; with Cycling or
+// IterationLimit, memory.previous holds the last round's point.
+void plain_rounds(const RoundContext& c, ExpertResult& result, bool point_is_plan) {
   const ExpertSettings& e = c.config.expert;
-  Iterate two_back;  // the solution of the round before the last
+  Iterate& point = c.memory.point;
+  Iterate& two_back = c.memory.two_back;  // the solution of the round before the last
   for (int round = 1; round <= e.max_iterations; ++round) {
-    const RoundSolution round_solution =
+    const RoundSolution& round_solution =
         solve_round(c, point, kInfinity, result, round == 1 && c.first_point_is_warm_start);
     const LaneChangeSolution& solution = round_solution.solution;
     RoundReport report = report_of(solution);
@@ -344,7 +355,7 @@ void plain_rounds(const RoundContext& c, Iterate point, ExpertResult& result, It
     const double repeat = round > 2 ? largest_position_change(solution.path, two_back) : kInfinity;
     const bool cycling = repeat <= e.cycle_tolerance && report.max_change > e.convergence_tolerance;
     result.rounds.push_back(report);
-    two_back = std::move(result.path);
+    std::swap(two_back, result.path);
     adopt(result, round_solution);
     point = solution.path;
     if (report.max_change <= e.convergence_tolerance) {
@@ -361,7 +372,7 @@ void plain_rounds(const RoundContext& c, Iterate point, ExpertResult& result, It
                     "%.3f m: the rounds alternate between two paths",
                     round, round - 2, repeat, report.max_change);
       result.reason = reason;
-      previous = std::move(two_back);
+      std::swap(c.memory.previous, two_back);
       return;
     }
   }
@@ -370,7 +381,7 @@ void plain_rounds(const RoundContext& c, Iterate point, ExpertResult& result, It
   std::snprintf(reason, sizeof reason, "not converged after %d rounds (last change %.3f m)",
                 e.max_iterations, result.rounds.back().max_change);
   result.reason = reason;
-  previous = std::move(two_back);
+  std::swap(c.memory.previous, two_back);
 }
 
 // True when the step from `point` to `next` turns back on the step that led
@@ -394,10 +405,9 @@ bool reverses(const Iterate& next, const Iterate& point, const Iterate& previous
 // always holds a path with their dynamics, however small the box; a box around
 // a round's own solution would not (it is off its own linearization by up to
 // the defect, decimetres in the rounds that fail).
-Iterate rollout(const Scenario& scenario, const Iterate& path, double dt) {
-  Iterate out;
+void rollout(const Scenario& scenario, const Iterate& path, double dt, Iterate& out) {
   out.controls = path.controls;
-  out.states.reserve(path.states.size());
+  out.states.clear();
   EgoState z = scenario.ego;
   for (std::size_t k = 0; k < path.states.size(); ++k) {
     out.states.emplace_back(z.x, z.y, z.v, z.theta);
@@ -405,7 +415,6 @@ Iterate rollout(const Scenario& scenario, const Iterate& path, double dt) {
       z = step_trapezoidal(z, {path.controls[k][kA], path.controls[k][kOmega]}, dt);
     }
   }
-  return out;
 }
 
 // Rounds within a box around the rollout of the last solution, where the plain
@@ -417,14 +426,16 @@ Iterate rollout(const Scenario& scenario, const Iterate& path, double dt) {
 // within the box about it (docs/expert.md counts both kinds). A step that
 // reverses the last one, or fails to contract, shrinks the box; an empty box
 // grows it again.
-void trust_region_rounds(const RoundContext& c, ExpertResult& result, Iterate previous) {
+void trust_region_rounds(const RoundContext& c, ExpertResult& result) {
   const ExpertSettings& e = c.config.expert;
   const int plain = result.iterations();
-  Iterate point = rollout(c.scenario, result.path, c.dt);
+  Iterate& previous = c.memory.previous;
+  Iterate& point = c.memory.point;
+  rollout(c.scenario, result.path, c.dt, point);
   double radius = e.trust_radius;
   double last_change = result.rounds.back().max_change;
   for (int extra = 1; extra <= e.trust_rounds; ++extra) {
-    const RoundSolution round_solution = solve_round(c, point, radius, result);
+    const RoundSolution& round_solution = solve_round(c, point, radius, result);
     const LaneChangeSolution& solution = round_solution.solution;
     RoundReport report = report_of(solution);
     report.trust_radius = radius;
@@ -451,8 +462,8 @@ void trust_region_rounds(const RoundContext& c, ExpertResult& result, Iterate pr
     const bool stalls = report.max_change < radius && report.max_change >= last_change;
     if (stalls || reverses(solution.path, point, previous)) radius *= e.trust_shrink;
     last_change = report.max_change;
-    previous = std::move(point);
-    point = rollout(c.scenario, solution.path, c.dt);
+    std::swap(previous, point);
+    rollout(c.scenario, solution.path, c.dt, point);
   }
   result.status = PlanStatus::IterationLimit;
   char reason[160];
@@ -503,6 +514,21 @@ std::string start_inside_safe_distance(const Scenario& s) {
 
 }  // namespace
 
+void ExpertResult::clear() {
+  status = PlanStatus::SolverError;
+  reason.clear();
+  path.states.clear();
+  path.controls.clear();
+  modes.clear();
+  occupancy.clear();
+  gap.behind.clear();
+  gap.ahead.clear();
+  objective = kInfinity;
+  best_bound = -kInfinity;
+  rounds.clear();
+  total_ms = 0.0;
+}
+
 TrafficPrediction prediction_along(const Scenario& scenario, const Config& config,
                                    int predicted_steps, double dt, const Iterate& point) {
   if (!traffic_reacts(scenario, config)) {
@@ -515,6 +541,13 @@ TrafficPrediction prediction_along(const Scenario& scenario, const Config& confi
 
 ExpertResult ExpertPlanner::plan(const Scenario& scenario, const PlanLimits& limits,
                                  const PlanHints& hints) const {
+  ExpertResult result;
+  plan(scenario, limits, hints, result);
+  return result;
+}
+
+void ExpertPlanner::plan(const Scenario& scenario, const PlanLimits& limits, const PlanHints& hints,
+                         ExpertResult& result) const {
   const auto start = Clock::now();
   const Config config = effective_config(config_, scenario);
   const double dt = scenario.horizon / scenario.steps;
@@ -539,23 +572,22 @@ ExpertResult ExpertPlanner::plan(const Scenario& scenario, const PlanLimits& lim
                              hints.gap,
                              !hint_path_fits(scenario, hints),
                              hints.memory != nullptr ? *hints.memory : *own_memory};
-  ExpertResult result;
+  result.clear();
   predict_traffic(scenario, config, context.predicted_steps, dt, nullptr, context.memory.traffic,
                   result.prediction);
-  Iterate previous;
-  plain_rounds(context, first_point(scenario, config, hints, result.prediction), result, previous,
-               hints.path_is_plan && hint_path_fits(scenario, hints));
+  context.memory.previous.states.clear();
+  first_point(scenario, config, hints, result.prediction, context.memory);
+  plain_rounds(context, result, hints.path_is_plan && hint_path_fits(scenario, hints));
   const bool failed_to_converge =
       result.status == PlanStatus::Cycling || result.status == PlanStatus::IterationLimit;
   if (failed_to_converge && config.expert.globalisation == Globalisation::TrustRegion) {
-    trust_region_rounds(context, result, std::move(previous));
+    trust_region_rounds(context, result);
   }
   if (result.status == PlanStatus::Infeasible) {
     const std::string why = start_inside_safe_distance(scenario);
     if (!why.empty()) result.reason += "; " + why;
   }
   result.total_ms = elapsed_ms(start);
-  return result;
 }
 
 LinearizedRound ExpertPlanner::first_round(const Scenario& scenario, const PlanHints& hints) const {

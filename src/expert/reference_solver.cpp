@@ -29,6 +29,20 @@ LaneChangeSolution ReferenceLaneChangeSolver::solve(const LaneChangeQp& qp,
   return out;
 }
 
+void LaneChangeSolution::clear() {
+  status = MiqpStatus::NumericalError;
+  path.states.clear();
+  path.controls.clear();
+  modes.clear();
+  objective = kInfinity;
+  best_bound = -kInfinity;
+  nodes = 0;
+  qp_iterations = 0;
+  incumbent_qps = 0;
+  solve_ms = 0.0;
+  message.clear();
+}
+
 std::shared_ptr<const LaneChangeSolver> make_lane_change_solver(std::string_view name,
                                                                 double big_m) {
   if (name == "reference") return std::make_shared<ReferenceLaneChangeSolver>(big_m);

@@ -115,6 +115,14 @@ void QpWorkspace::setup(const StructuredQp& qp) {
   if (!has_solution_) {
     for (auto* v : {&t_, &lambda_, &sigma_, &lambda_soft_}) v->assign(rows, 0.0);
   }
+  // carry_solution swaps these with their carried copies: each pair grows
+  // together, so that no later swap brings a smaller one back.
+  for (auto [own, carried] :
+       {std::pair{&t_, &carried_t_}, std::pair{&lambda_, &carried_lambda_},
+        std::pair{&sigma_, &carried_sigma_}, std::pair{&lambda_soft_, &carried_lambda_soft_}}) {
+    carried->reserve(own->capacity());
+    own->reserve(carried->capacity());
+  }
   for (auto* v : {&dt_, &dlambda_, &dsigma_, &dlambda_soft_, &weight_, &offset_, &soft_q_, &dt_aff_,
                   &dlambda_aff_, &dsigma_aff_, &dlambda_soft_aff_, &a_, &inverse_t_,
                   &inverse_sigma_, &inverse_a_plus_b_, &residual_}) {

@@ -74,8 +74,8 @@ double quintic_time_at(double level) {
 // point, with the given lateral motion (value and rate in t). The caller
 // fills the controls once its states are final.
 template <class Lateral>
-Iterate quintic_path(const Scenario& s, const Config& c, const TrafficPrediction& p,
-                     const Lateral& lateral, const Gap& gap) {
+void quintic_path(const Scenario& s, const Config& c, const TrafficPrediction& p,
+                  const Lateral& lateral, const Gap& gap, Iterate& path) {
   const double T = s.horizon;
   const double dt = T / s.steps;
   const GapAim end_state = aim_into(s, c, p, gap, std::min(s.steps, p.nodes() - 1));
@@ -85,39 +85,36 @@ Iterate quintic_path(const Scenario& s, const Config& c, const TrafficPrediction
   const double aim = std::max(end_state.x, s.ego.x + 0.5 * (s.ego.v + end_speed) * T * 0.25);
   const Quintic x(s.ego.x, s.ego.v * std::cos(s.ego.theta), s.ego.a, aim, end_speed, end_state.a,
                   T);
-  Iterate path;
+  path.states.clear();
   for (int k = 0; k <= s.steps; ++k) {
     const double t = k * dt;
     const double vx = std::max(x.rate(t), 0.1);
     const double vy = lateral.rate(t);
     path.states.emplace_back(x.value(t), lateral.value(t), std::hypot(vx, vy), std::atan2(vy, vx));
   }
-  return path;
 }
 
-Iterate quintic_warm_start(const Scenario& s, const Config& c, const TrafficPrediction& p,
-                           const Gap& gap) {
+void quintic_warm_start(const Scenario& s, const Config& c, const TrafficPrediction& p,
+                        const Gap& gap, Iterate& path) {
   const Quintic y(s.ego.y, s.ego.v * std::sin(s.ego.theta), 0.0, s.lane_width, 0.0, 0.0, s.horizon);
-  Iterate path = quintic_path(s, c, p, y, gap);
+  quintic_path(s, c, p, y, gap, path);
   fill_controls(path, s.horizon / s.steps);
-  return path;
 }
 
 // The authors' code: x = v0 t, a quintic y with zero end rates, v linear to
 // the target's speed, theta constant.
-Iterate authors_warm_start(const Scenario& s, const TrafficPrediction& p) {
+void authors_warm_start(const Scenario& s, const TrafficPrediction& p, Iterate& path) {
   const double T = s.horizon;
   const double dt = T / s.steps;
   const Quintic y(s.ego.y, 0.0, 0.0, s.lane_width, 0.0, 0.0, T);
   const double v_end = s.has(Role::Target) ? p.car(s.index_of(Role::Target)).v.front() : s.ego.v;
-  Iterate path;
+  path.states.clear();
   for (int k = 0; k <= s.steps; ++k) {
     const double t = k * dt;
     path.states.emplace_back(s.ego.x + s.ego.v * t, y.value(t), s.ego.v + (v_end - s.ego.v) * t / T,
                              s.ego.theta);
   }
   fill_controls(path, dt);
-  return path;
 }
 
 // The lateral move whose body first touches the line at node `touches` and
@@ -157,8 +154,8 @@ Iterate warm_start_for_modes(const Scenario& scenario, const Config& config,
   }
   // Under the either-or rule a node is in one lane or the other.
   if (touches >= 0 && across < 0 && rule == LaneRule::EitherOr) across = touches;
-  Iterate path =
-      quintic_path(scenario, config, prediction, move_timed_to(scenario, touches, across), gap);
+  Iterate path;
+  quintic_path(scenario, config, prediction, move_timed_to(scenario, touches, across), gap, path);
   // The flat start would give node 0 no heading; it has the ego's.
   path.states.front() = State(scenario.ego.x, scenario.ego.y, scenario.ego.v, scenario.ego.theta);
   fill_controls(path, scenario.horizon / scenario.steps);
@@ -170,11 +167,20 @@ Iterate warm_start_for_modes(const Scenario& scenario, const Config& config,
   return warm_start_for_modes(scenario, config, prediction, modes, paper_gap(scenario));
 }
 
+void warm_start(const Scenario& scenario, const Config& config, const TrafficPrediction& prediction,
+                const Gap& gap, Iterate& out) {
+  if (config.expert.warm_start == WarmStart::Authors) {
+    authors_warm_start(scenario, prediction, out);
+  } else {
+    quintic_warm_start(scenario, config, prediction, gap, out);
+  }
+}
+
 Iterate warm_start(const Scenario& scenario, const Config& config,
                    const TrafficPrediction& prediction, const Gap& gap) {
-  return config.expert.warm_start == WarmStart::Authors
-             ? authors_warm_start(scenario, prediction)
-             : quintic_warm_start(scenario, config, prediction, gap);
+  Iterate out;
+  warm_start(scenario, config, prediction, gap, out);
+  return out;
 }
 
 Iterate warm_start(const Scenario& scenario, const Config& config,

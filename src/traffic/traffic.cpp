@@ -291,7 +291,7 @@ void predict_traffic(const Scenario& scenario, const Config& config, int steps, 
                      TrafficPrediction& out) {
   model.reset(scenario, config);
   out.dt = dt;
-  out.cars.resize(scenario.car_count());
+  resize_keeping(out.cars, scenario.car_count(), out.spare);
   for (auto& track : out.cars) {
     for (auto* series : {&track.x, &track.v, &track.a}) {
       series->clear();

@@ -21,6 +21,7 @@
 #include "lanechange/config.hpp"
 #include "lanechange/expert/miqp.hpp"
 #include "lanechange/scenario.hpp"
+#include "lanechange/spare.hpp"
 #include "lanechange/traffic.hpp"
 
 namespace lanechange::expert {
@@ -110,12 +111,16 @@ struct Gap {
 /// Eq. 1's one gap: between the scene's follower and target (open where the
 /// scene has no car in that role).
 [[nodiscard]] Gap paper_gap(const Scenario& scenario);
+/// The same into `out`, whose lists keep their memory.
+void paper_gap(const Scenario& scenario, Gap& out);
 /// The gaps config.expert.gap allows, from the back of the target lane:
 /// the paper's alone (fixed), or one per place between, ahead of and behind
 /// the target-lane cars as they stand at t = 0 (best).
 [[nodiscard]] std::vector<Gap> target_lane_gaps(const Scenario& scenario, GapChoice choice);
 /// The same into `out`, whose gaps keep their lists' memory.
-void target_lane_gaps(const Scenario& scenario, GapChoice choice, std::vector<Gap>& out);
+/// With `spare`, gaps dropped for a smaller scene wait there with their memory.
+void target_lane_gaps(const Scenario& scenario, GapChoice choice, std::vector<Gap>& out,
+                      Spare<Gap>* spare = nullptr);
 /// Where a plan into `gap` aims at prediction node `node`: behind the gap's
 /// car ahead by its safe distance (expert.aim_behind_target; else at it), at
 /// that car's speed and acceleration; ahead of the car behind where the gap

@@ -30,6 +30,8 @@ struct LaneChangeSolution {
   double solve_ms = 0.0;
   std::string message;
   [[nodiscard]] bool has_solution() const { return !path.states.empty(); }
+  /// As a solution made afresh, keeping the memory of its lists.
+  void clear();
 };
 
 /// Memory a back-end may keep between solves (rounds of one plan, or plans of
@@ -61,6 +63,13 @@ class LaneChangeSolver {
   [[nodiscard]] virtual LaneChangeSolution solve(const LaneChangeQp& qp,
                                                  const MiqpSettings& settings,
                                                  const SolveHints& hints = {}) const = 0;
+  /// The same into `out`, whose lists keep their memory: with the same
+  /// workspace, a caller that solves again allocates nothing once they have
+  /// grown (the fast and fixed-mode back-ends; the others fill it by value).
+  virtual void solve_into(const LaneChangeQp& qp, const MiqpSettings& settings,
+                          const SolveHints& hints, LaneChangeSolution& out) const {
+    out = solve(qp, settings, hints);
+  }
 };
 
 /// The reference: the MIQP form (to_miqp) solved by Bonmin's B-BB to proven
@@ -93,6 +102,8 @@ class FastLaneChangeSolver final : public LaneChangeSolver {
   [[nodiscard]] std::unique_ptr<LaneChangeWorkspace> make_workspace() const override;
   [[nodiscard]] LaneChangeSolution solve(const LaneChangeQp& qp, const MiqpSettings& settings,
                                          const SolveHints& hints = {}) const override;
+  void solve_into(const LaneChangeQp& qp, const MiqpSettings& settings, const SolveHints& hints,
+                  LaneChangeSolution& out) const override;
 
  private:
   FastSolverOptions options_;
@@ -121,6 +132,8 @@ class FixedModeLaneChangeSolver final : public LaneChangeSolver {
   [[nodiscard]] std::unique_ptr<LaneChangeWorkspace> make_workspace() const override;
   [[nodiscard]] LaneChangeSolution solve(const LaneChangeQp& qp, const MiqpSettings& settings,
                                          const SolveHints& hints = {}) const override;
+  void solve_into(const LaneChangeQp& qp, const MiqpSettings& settings, const SolveHints& hints,
+                  LaneChangeSolution& out) const override;
 
  private:
   FixedModeSettings settings_;

@@ -80,6 +80,8 @@ struct ExpertResult {
     return (status == PlanStatus::TimeLimit || status == PlanStatus::WorkLimit) &&
            !path.states.empty();
   }
+  /// As a result made afresh, keeping the memory of its lists.
+  void clear();
 };
 
 struct PlanLimits {
@@ -95,6 +97,13 @@ struct PlanLimits {
 /// The memory a plan builds its problems and predicts the cars in, kept by
 /// the caller across plans as PlanHints::workspace is: a thread's later plans
 /// then reuse it instead of allocating their own.
+/// One round's answer: the best gap's solution, what its modes mean, and the gap.
+struct RoundSolution {
+  LaneChangeSolution solution;
+  std::vector<std::optional<LaneOccupancy>> occupancy;  ///< of the solution's modes
+  Gap gap;                                              ///< the solution's
+};
+
 struct PlanMemory {
   LaneChangeQp problem;                ///< each gap's problem in turn, built in place
   TrafficModel traffic;                ///< the model each prediction resets
@@ -102,6 +111,15 @@ struct PlanMemory {
   TrafficPrediction round_start;       ///< the cars as a round begins
   TrafficPrediction gap_cars;          ///< the cars as the gap being solved sees them
   std::vector<Gap> gaps;               ///< a round's gaps, in the order it solves them
+  Spare<Gap> spare_gaps;               ///< gaps of a larger scene, with their memory
+  Gap paper_gap;                       ///< Eq. 1's, which the first warm start aims into
+  std::vector<int> mode_hint;          ///< the modes a gap's search tries first
+  Iterate point;                       ///< the round's linearization point
+  Iterate gap_point;                   ///< a first round's warm start aimed into one gap
+  Iterate two_back;                    ///< the solution of the round before the last
+  Iterate previous;                    ///< the point before the last (trust region)
+  LaneChangeSolution gap_solution;     ///< the gap being solved
+  RoundSolution round;                 ///< the round's best gap so far
 };
 
 struct PlanHints {
@@ -141,6 +159,9 @@ struct PlanHints {
 /// `gap` (the quintic ends behind its car ahead, at that car's speed).
 [[nodiscard]] Iterate warm_start(const Scenario& scenario, const Config& config,
                                  const TrafficPrediction& prediction, const Gap& gap);
+/// The same into `out`, whose lists keep their memory.
+void warm_start(const Scenario& scenario, const Config& config, const TrafficPrediction& prediction,
+                const Gap& gap, Iterate& out);
 /// The same aimed into Eq. 1's gap (paper_gap).
 [[nodiscard]] Iterate warm_start(const Scenario& scenario, const Config& config,
                                  const TrafficPrediction& prediction);
@@ -171,6 +192,11 @@ class ExpertPlanner {
 
   [[nodiscard]] ExpertResult plan(const Scenario& scenario, const PlanLimits& limits = {},
                                   const PlanHints& hints = {}) const;
+  /// The same into `result`, whose memory a caller that plans again keeps:
+  /// with hints.workspace and hints.memory kept too, a thread's plans
+  /// allocate nothing once it has planned scenes of that size.
+  void plan(const Scenario& scenario, const PlanLimits& limits, const PlanHints& hints,
+            ExpertResult& result) const;
 
   /// The MIQP of `plan`'s first round, for the same scenario and hints: the
   /// dynamics linearized about the hint's path (else the warm start), the

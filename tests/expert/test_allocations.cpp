@@ -1,0 +1,108 @@
+// A thread's plans allocate nothing once its workspace, memory and result
+// have held a plan of each scene: this program replaces operator new to
+// count the heap allocations of the calling thread. With
+// LANECHANGE_TRACE_ALLOCATIONS=1 it prints where each counted one was made.
+#include <execinfo.h>
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <memory>
+#include <new>
+#include <vector>
+
+#include "lanechange/expert/planner.hpp"
+#include "lanechange/sampler.hpp"
+
+namespace {
+
+thread_local bool t_counting = false;
+thread_local long t_allocations = 0;
+
+void note_allocation() {
+  if (!t_counting) return;
+  ++t_allocations;
+  static const bool trace = std::getenv("LANECHANGE_TRACE_ALLOCATIONS") != nullptr;
+  if (!trace) return;
+  t_counting = false;  // backtrace itself may allocate
+  void* frames[12];
+  const int depth = backtrace(frames, 12);
+  backtrace_symbols_fd(frames, depth, STDERR_FILENO);
+  std::fputs("--\n", stderr);
+  t_counting = true;
+}
+
+}  // namespace
+
+void* operator new(std::size_t size) {
+  note_allocation();
+  if (void* p = std::malloc(size == 0 ? 1 : size)) return p;
+  throw std::bad_alloc();
+}
+void operator delete(void* p) noexcept { std::free(p); }
+void operator delete(void* p, std::size_t /*size*/) noexcept { std::free(p); }
+// Over-aligned types (Eigen's, with wider vector units) come through these.
+void* operator new(std::size_t size, std::align_val_t alignment) {
+  note_allocation();
+  const auto align = static_cast<std::size_t>(alignment);
+  const std::size_t rounded = (size + align - 1) / align * align;
+  if (void* p = std::aligned_alloc(align, rounded == 0 ? align : rounded)) return p;
+  throw std::bad_alloc();
+}
+void operator delete(void* p, std::align_val_t /*alignment*/) noexcept { std::free(p); }
+void operator delete(void* p, std::size_t /*size*/, std::align_val_t /*alignment*/) noexcept {
+  std::free(p);
+}
+
+namespace lanechange::expert {
+namespace {
+
+// Counts the allocations `f` makes on this thread.
+template <class F>
+long allocations_of(F&& f) {
+  t_allocations = 0;
+  t_counting = true;
+  f();
+  t_counting = false;
+  return t_allocations;
+}
+
+// Three-car scenes and dense ones (eight cars in the target lane), some of
+// which no gap admits: plans that converge and plans that fail.
+std::vector<Scenario> mixed_scenes() {
+  Config dense;
+  dense.sampler.target_lane_cars = {8, 8};
+  const ScenarioSampler three_cars(Config{}, 2026);
+  const ScenarioSampler eight_cars(dense, 2026);
+  std::vector<Scenario> scenes;
+  for (std::uint64_t i = 0; i < 12; ++i) scenes.push_back(three_cars.sample(i));
+  for (std::uint64_t i = 0; i < 10; ++i) scenes.push_back(eight_cars.sample(i));
+  return scenes;
+}
+
+TEST(Allocations, APlanAllocatesNothingOnceItsThreadHasPlannedTheSceneBefore) {
+  const Config config;
+  const std::vector<Scenario> scenes = mixed_scenes();
+  const ExpertPlanner planner(config, std::make_shared<FastLaneChangeSolver>());
+  const auto workspace = planner.solver().make_workspace();
+  PlanMemory memory;
+  PlanHints hints;
+  hints.workspace = workspace.get();
+  hints.memory = &memory;
+  ExpertResult result;
+  for (const Scenario& scene : scenes) planner.plan(scene, {}, hints, result);
+  int converged = 0;
+  int failed = 0;
+  for (std::size_t i = 0; i < scenes.size(); ++i) {
+    const long count = allocations_of([&] { planner.plan(scenes[i], {}, hints, result); });
+    EXPECT_EQ(count, 0) << "scene " << i << " (status " << to_string(result.status) << ")";
+    (result.status == PlanStatus::Converged ? converged : failed) += 1;
+  }
+  // Both kinds of plan are counted.
+  EXPECT_GE(converged, 10);
+  EXPECT_GE(failed, 2);
+}
+
+}  // namespace
+}  // namespace lanechange::expert
