@@ -475,6 +475,46 @@ bool modes_can_hold(const LaneChangeQp& qp, const std::vector<int>& modes) {
   return true;
 }
 
+namespace {
+
+// Room for every node QP and search of the round, made before it starts: the
+// most rows a node can carry (the base's, both bounds of every state
+// component, and its busiest mode's rows or its ramp), a stack as deep as a
+// depth-first search over the nodes' modes can grow, and node paths.
+void reserve_for_search(const LaneChangeQp& qp, FastWorkspace& ws) {
+  const int n = qp.steps;
+  constexpr std::size_t kStateBoundRows = 8;  // both bounds of x, y, v and theta
+  std::size_t rows = 0;
+  for (int k = 0; k <= n; ++k) {
+    std::size_t lane = 1;  // a ramp
+    for (const LaneMode& m : qp.node_modes[k]) lane = std::max(lane, m.rows.size());
+    const std::size_t stage_rows = ws.base.stages[k].rows.size() + kStateBoundRows + lane;
+    ws.node.stages[k].rows.reserve(stage_rows);
+    rows += stage_rows;
+  }
+  ws.qp_workspace.reserve(rows);
+  ws.child_order.reserve(4);
+  for (std::vector<int>* modes : {&ws.root_modes, &ws.switch_modes, &ws.switch_trial,
+                                  &ws.fixed_modes, &ws.start_modes[0], &ws.start_modes[1]}) {
+    modes->reserve(static_cast<std::size_t>(n) + 1);
+  }
+  const std::size_t deepest = 3 * (static_cast<std::size_t>(n) + 1);
+  ws.stack.reserve(deepest);
+  ws.spare_modes.reserve(deepest);
+  while (ws.spare_modes.size() + ws.stack.size() < deepest) {
+    ws.spare_modes.emplace_back().reserve(static_cast<std::size_t>(n) + 1);
+  }
+  constexpr std::size_t kPaths = 8;  // more than a search holds at once
+  ws.spare_paths.reserve(2 * kPaths);
+  while (ws.spare_paths.size() < kPaths) {
+    Iterate& path = ws.spare_paths.emplace_back();
+    path.states.reserve(static_cast<std::size_t>(n) + 1);
+    path.controls.reserve(static_cast<std::size_t>(n));
+  }
+}
+
+}  // namespace
+
 void prepare_round(const LaneChangeQp& qp, const SolveHints& hints, FastWorkspace& ws,
                    bool reachable_modes) {
   const int n = qp.steps;
@@ -493,6 +533,7 @@ void prepare_round(const LaneChangeQp& qp, const SolveHints& hints, FastWorkspac
   for (Control& u : ws.start_controls) {
     u = u.cwiseMax(qp.control_lower + margin).cwiseMin(qp.control_upper - margin);
   }
+  reserve_for_search(qp, ws);
   ws.possible_modes.assign(n + 1, ~0U);
   ws.reach_lower.assign(n + 1, State::Constant(-kInfinity));
   ws.reach_upper.assign(n + 1, State::Constant(kInfinity));

@@ -303,6 +303,12 @@ void target_lane_gaps(const Scenario& s, GapChoice choice, std::vector<Gap>& out
   std::size_t count = 0;
   for (CarIndex c = 0; c < s.car_count(); ++c) count += s.cars[c].lane == Lane::Target ? 1 : 0;
   resize(count + 1);
+  // Every list with room for the whole lane: a caller that reorders the gaps
+  // (the planner puts the likeliest first) then finds room in each.
+  for (Gap& gap : out) {
+    gap.behind.reserve(count);
+    gap.ahead.reserve(count);
+  }
   // The lane from the back, in the first gap's list (the one ahead of every
   // car): an insertion sort, stable and without the buffer stable_sort takes.
   std::vector<CarIndex>& lane = out[0].ahead;

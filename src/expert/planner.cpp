@@ -512,6 +512,35 @@ std::string start_inside_safe_distance(const Scenario& s) {
   return "";
 }
 
+// Room for a plan of `scenario` in the lists that its rounds trade with one
+// another (points, solutions, the result's path), made before the first
+// round: a later plan then allocates nothing whatever its rounds do.
+void reserve_for_plan(const Scenario& scenario, const Config& config, PlanMemory& memory,
+                      ExpertResult& result) {
+  const auto nodes = static_cast<std::size_t>(scenario.steps) + 1;
+  for (Iterate* path : {&memory.point, &memory.gap_point, &memory.two_back, &memory.previous,
+                        &memory.gap_solution.path, &memory.round.solution.path, &result.path}) {
+    path->states.reserve(nodes);
+    path->controls.reserve(nodes);
+  }
+  for (std::vector<int>* modes : {&memory.mode_hint, &memory.gap_solution.modes,
+                                  &memory.round.solution.modes, &result.modes}) {
+    modes->reserve(nodes);
+  }
+  result.occupancy.reserve(nodes);
+  memory.round.occupancy.reserve(nodes);
+  for (Gap* gap : {&memory.round.gap, &result.gap}) {
+    gap->behind.reserve(scenario.car_count());
+    gap->ahead.reserve(scenario.car_count());
+  }
+  result.rounds.reserve(static_cast<std::size_t>(config.expert.max_iterations) +
+                        static_cast<std::size_t>(config.expert.trust_rounds) + 1);
+  constexpr std::size_t kReasonLength = 256;  // the longest reason with its numbers
+  result.reason.reserve(kReasonLength);
+  memory.gap_solution.message.reserve(kReasonLength);
+  memory.round.solution.message.reserve(kReasonLength);
+}
+
 }  // namespace
 
 void ExpertResult::clear() {
@@ -573,6 +602,7 @@ void ExpertPlanner::plan(const Scenario& scenario, const PlanLimits& limits, con
                              !hint_path_fits(scenario, hints),
                              hints.memory != nullptr ? *hints.memory : *own_memory};
   result.clear();
+  reserve_for_plan(scenario, config, context.memory, result);
   predict_traffic(scenario, config, context.predicted_steps, dt, nullptr, context.memory.traffic,
                   result.prediction);
   context.memory.previous.states.clear();

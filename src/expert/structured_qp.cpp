@@ -130,6 +130,38 @@ void QpWorkspace::setup(const StructuredQp& qp) {
   }
 }
 
+void QpWorkspace::reserve(std::size_t rows) {
+  single_index_.reserve(rows);
+  control_box_.reserve(rows);
+  packed_.reserve(rows);
+  for (auto* v : {&t_,
+                  &lambda_,
+                  &sigma_,
+                  &lambda_soft_,
+                  &carried_t_,
+                  &carried_lambda_,
+                  &carried_sigma_,
+                  &carried_lambda_soft_,
+                  &dt_,
+                  &dlambda_,
+                  &dsigma_,
+                  &dlambda_soft_,
+                  &weight_,
+                  &offset_,
+                  &soft_q_,
+                  &dt_aff_,
+                  &dlambda_aff_,
+                  &dsigma_aff_,
+                  &dlambda_soft_aff_,
+                  &a_,
+                  &inverse_t_,
+                  &inverse_sigma_,
+                  &inverse_a_plus_b_,
+                  &residual_}) {
+    v->reserve(rows);
+  }
+}
+
 void QpWorkspace::mark_control_boxes(const StructuredQp& qp) {
   const int stages = qp.steps() + 1;
   constexpr double kNone = std::numeric_limits<double>::infinity();

@@ -25,6 +25,13 @@ constexpr double kStepReserveMs = 3.0;
 
 Iterate shifted(const Iterate& path, int by, int steps, double dt) {
   Iterate out;
+  shifted(path, by, steps, dt, out);
+  return out;
+}
+
+void shifted(const Iterate& path, int by, int steps, double dt, Iterate& out) {
+  out.states.clear();
+  out.controls.clear();
   const int last_state = static_cast<int>(path.states.size()) - 1;
   const int last_control = static_cast<int>(path.controls.size()) - 1;
   for (int k = 0; k <= steps; ++k) {
@@ -36,15 +43,19 @@ Iterate shifted(const Iterate& path, int by, int steps, double dt) {
     out.states.push_back(z);
     if (k < steps) out.controls.push_back(path.controls[std::min(from, last_control)]);
   }
-  return out;
 }
 
 std::vector<int> shifted(const std::vector<int>& modes, int by, int steps) {
-  std::vector<int> out(static_cast<std::size_t>(steps) + 1, -1);
-  if (modes.empty()) return out;
+  std::vector<int> out;
+  shifted(modes, by, steps, out);
+  return out;
+}
+
+void shifted(const std::vector<int>& modes, int by, int steps, std::vector<int>& out) {
+  out.assign(static_cast<std::size_t>(steps) + 1, -1);
+  if (modes.empty()) return;
   const int last = static_cast<int>(modes.size()) - 1;
   for (int k = 1; k <= steps; ++k) out[k] = modes[std::min(k + by, last)];
-  return out;
 }
 
 Config closed_loop_expert(Config config) {
@@ -54,7 +65,13 @@ Config closed_loop_expert(Config config) {
 }
 
 Scenario scene_now(const Observation& o, const Config& config) {
-  Scenario scene = *o.scene;
+  Scenario scene;
+  scene_now(o, config, scene);
+  return scene;
+}
+
+void scene_now(const Observation& o, const Config& config, Scenario& scene) {
+  scene = *o.scene;
   scene.ego = o.ego;
   for (CarIndex c = 0; c < scene.car_count(); ++c) scene.cars[c].state = o.car(c);
   const double dt = o.scene->horizon / o.scene->steps;
@@ -63,14 +80,14 @@ Scenario scene_now(const Observation& o, const Config& config) {
     scene.steps = std::max(2, static_cast<int>(std::lround(left / dt)));
     scene.horizon = scene.steps * dt;
   }
-  return scene;
 }
 
 MiqpSession::MiqpSession(const expert::ExpertPlanner& expert, const Config& config)
     : MiqpSession(
           [&expert](const Scenario& scene, const expert::PlanLimits& limits,
-                    const expert::PlanHints& hints) { return expert.plan(scene, limits, hints); },
-          config) {}
+                    const expert::PlanHints& hints,
+                    expert::ExpertResult& result) { expert.plan(scene, limits, hints, result); },
+          config, expert.solver().make_workspace()) {}
 
 MiqpSession::MiqpSession(PlanFunction plan, const Config& config,
                          std::unique_ptr<expert::LaneChangeWorkspace> workspace)
@@ -97,15 +114,18 @@ Decision MiqpSession::act(const Observation& o) {
 }
 
 std::string MiqpSession::replan(const Observation& o) {
-  const Scenario scene = scene_now(o, config_);
+  scene_now(o, config_, scene_);
+  const Scenario& scene = scene_;
   const double dt = scene.horizon / scene.steps;
-  Iterate guess;
-  std::vector<int> modes;
   expert::PlanHints hints;
+  const auto nodes = static_cast<std::size_t>(scene.steps) + 1;
+  guess_.states.reserve(nodes);  // at the first re-plan: the later ones fill them
+  guess_.controls.reserve(nodes);
+  guess_modes_.reserve(nodes);
   if (plan_) {
-    guess = shifted(*plan_, o.step - plan_step_, scene.steps, dt);
-    modes = shifted(modes_, o.step - plan_step_, scene.steps);
-    hints = {&guess, &modes, true};
+    shifted(*plan_, o.step - plan_step_, scene.steps, dt, guess_);
+    shifted(modes_, o.step - plan_step_, scene.steps, guess_modes_);
+    hints = {&guess_, &guess_modes_, true};
     hints.last_gap = &plan_gap_;
   }
   hints.memory = &memory_;
@@ -118,7 +138,8 @@ std::string MiqpSession::replan(const Observation& o) {
   expert::PlanLimits limits{
       std::max(0.0, step_wall_limit_ms(loop, loop.step_budget_ms) - kStepReserveMs) / 1000.0};
   if (loop.deadline == Deadline::Work) limits.qp_iterations = loop.step_qp_iterations;
-  const ExpertResult result = plan_function_(scene, limits, hints);
+  plan_function_(scene, limits, hints, result_);
+  const ExpertResult& result = result_;
   last_plan_ms_ = result.total_ms;
   last_status_ = result.status;
   // A plan cut by its budget still drives with the best it found: the

@@ -16,24 +16,33 @@ namespace lanechange::planner {
 /// The scene as it is now: the initial scene's fields with the current
 /// states of every car, and the horizon the config's mode asks for.
 [[nodiscard]] Scenario scene_now(const Observation& observation, const Config& config);
+/// The same into `out`, whose lists keep their memory.
+void scene_now(const Observation& observation, const Config& config, Scenario& out);
 
 /// The path shifted forward by `by` nodes and cut or padded (the last node
 /// coasting along its heading) to `steps` steps: a plan made `by` steps ago,
 /// as a guess for one from now.
 [[nodiscard]] expert::Iterate shifted(const expert::Iterate& path, int by, int steps, double dt);
+/// The same into `out`, whose lists keep their memory.
+void shifted(const expert::Iterate& path, int by, int steps, double dt, expert::Iterate& out);
 /// The lane modes likewise (node 0 free: its state is given).
 [[nodiscard]] std::vector<int> shifted(const std::vector<int>& modes, int by, int steps);
+void shifted(const std::vector<int>& modes, int by, int steps, std::vector<int>& out);
 
 /// Where a re-planning session gets its plans: the exact expert, or
 /// predicted strategies finished by QPs. Called with the scene now, the
-/// step's time limit and the last plan shifted to now as hints.
-using PlanFunction = std::function<expert::ExpertResult(const Scenario&, const expert::PlanLimits&,
-                                                        const expert::PlanHints&)>;
+/// step's time limit, the last plan shifted to now as hints, and the
+/// session's result to fill (its lists keep their memory from step to step).
+using PlanFunction = std::function<void(const Scenario&, const expert::PlanLimits&,
+                                        const expert::PlanHints&, expert::ExpertResult&)>;
 
 /// Re-plans every replan_period steps and follows the plan: the exact
 /// expert's way in closed loop, shared by every planner that re-plans.
 class MiqpSession final : public PlannerSession {
  public:
+  /// Its re-plans keep a workspace of the expert's solver and their memory:
+  /// once the session has planned, a step that follows a new plan allocates
+  /// nothing.
   MiqpSession(const expert::ExpertPlanner& expert, const Config& config);
   /// With a workspace, every re-plan solves in it (PlanHints::workspace),
   /// advanced by the steps since the last: the next plan's QPs warm-start
@@ -62,6 +71,10 @@ class MiqpSession final : public PlannerSession {
   std::unique_ptr<expert::LaneChangeWorkspace> workspace_;
   int workspace_step_ = 0;     ///< the step of the last re-plan that used workspace_
   expert::PlanMemory memory_;  ///< where every re-plan builds and predicts (PlanHints::memory)
+  Scenario scene_;             ///< the scene of the last re-plan
+  expert::Iterate guess_;      ///< the last plan shifted to now
+  std::vector<int> guess_modes_;
+  expert::ExpertResult result_;  ///< of the last re-plan
   double last_plan_ms_ = 0.0;
   expert::PlanStatus last_status_ = expert::PlanStatus::Converged;
   expert::GapFrame plan_gap_;

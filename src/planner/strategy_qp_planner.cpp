@@ -512,7 +512,8 @@ std::vector<CandidateOutcome> StrategyQpPlanner::assess(const Scenario& scene,
 std::unique_ptr<PlannerSession> StrategyQpPlanner::start(const Scenario& /*scene*/) const {
   return std::make_unique<MiqpSession>(
       [this](const Scenario& scene, const expert::PlanLimits& limits,
-             const expert::PlanHints& hints) { return plan(scene, limits, hints).result; },
+             const expert::PlanHints& hints,
+             expert::ExpertResult& result) { result = plan(scene, limits, hints).result; },
       config_, fixed_.solver().make_workspace());
 }
 

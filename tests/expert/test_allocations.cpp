@@ -14,6 +14,8 @@
 
 #include "lanechange/expert/planner.hpp"
 #include "lanechange/sampler.hpp"
+#include "lanechange/sim/simulator.hpp"
+#include "planner/miqp_planner.hpp"
 
 namespace {
 
@@ -102,6 +104,67 @@ TEST(Allocations, APlanAllocatesNothingOnceItsThreadHasPlannedTheSceneBefore) {
   // Both kinds of plan are counted.
   EXPECT_GE(converged, 10);
   EXPECT_GE(failed, 2);
+}
+
+// Counts the allocations of each step of the sessions it starts.
+class CountingPlanner final : public planner::ClosedLoopPlanner {
+ public:
+  struct Step {
+    long allocations = 0;
+    planner::Decision decision;
+  };
+  explicit CountingPlanner(const planner::ClosedLoopPlanner& inner) : inner_(inner) {}
+  [[nodiscard]] std::string_view name() const override { return inner_.name(); }
+  [[nodiscard]] std::unique_ptr<planner::PlannerSession> start(
+      const Scenario& scene) const override {
+    steps_.clear();
+    return std::make_unique<Session>(inner_.start(scene), steps_);
+  }
+  [[nodiscard]] const std::vector<Step>& steps() const { return steps_; }
+
+ private:
+  class Session final : public planner::PlannerSession {
+   public:
+    Session(std::unique_ptr<planner::PlannerSession> inner, std::vector<Step>& steps)
+        : inner_(std::move(inner)), steps_(steps) {}
+    planner::Decision act(const planner::Observation& observation) override {
+      planner::Decision decision;
+      const long count = allocations_of([&] { decision = inner_->act(observation); });
+      steps_.push_back({count, decision});
+      return decision;
+    }
+
+   private:
+    std::unique_ptr<planner::PlannerSession> inner_;
+    std::vector<Step>& steps_;
+  };
+  const planner::ClosedLoopPlanner& inner_;
+  mutable std::vector<Step> steps_;
+};
+
+TEST(Allocations, AMiqpStepThatFollowsANewPlanAllocatesNothingOnceItsSessionHasPlanned) {
+  const Config config;
+  const planner::MiqpPlanner miqp(config, std::make_shared<FastLaneChangeSolver>());
+  const CountingPlanner counting(miqp);
+  const std::vector<Scenario> scenes = mixed_scenes();
+  int counted = 0;
+  int planned = 0;
+  for (std::size_t i = 0; i < scenes.size(); i += 3) {
+    const sim::Rollout rollout = sim::simulate(scenes[i], counting, config);
+    const auto& steps = counting.steps();
+    ASSERT_FALSE(steps.empty());
+    // The first step sizes the session's memory; a step that falls back or
+    // follows an old plan says why in words, which it may allocate.
+    for (std::size_t k = 1; k < steps.size(); ++k) {
+      const planner::Decision& d = steps[k].decision;
+      if (d.status != planner::ActStatus::Planned || !d.reason.empty()) continue;
+      EXPECT_EQ(steps[k].allocations, 0) << "scene " << i << ", step " << k;
+      ++counted;
+    }
+    planned += static_cast<int>(steps.size());
+  }
+  // Most steps follow a new plan.
+  EXPECT_GE(counted, planned / 2);
 }
 
 }  // namespace

@@ -229,15 +229,14 @@ TEST(ClosedLoop, AReplanCutByItsBudgetDrivesWithItsIncumbent) {
   const Config config;
   auto cut = [](bool with_incumbent) {
     return [with_incumbent](const Scenario& scene, const expert::PlanLimits&,
-                            const expert::PlanHints&) {
-      expert::ExpertResult r;
+                            const expert::PlanHints&, expert::ExpertResult& r) {
+      r = expert::ExpertResult{};
       r.status = expert::PlanStatus::WorkLimit;
       r.reason = "the plan's interior-point iterations are spent";
       if (with_incumbent) {
         r.path.states.assign(static_cast<std::size_t>(scene.steps) + 1, expert::State::Zero());
         r.path.controls.assign(static_cast<std::size_t>(scene.steps), expert::Control(0.7, 0.0));
       }
-      return r;
     };
   };
   Observation o;

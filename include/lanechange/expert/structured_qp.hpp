@@ -149,6 +149,9 @@ struct KinematicDynamics {
 class QpWorkspace {
  public:
   void setup(const StructuredQp& qp);
+  /// Room for problems of up to `rows` rows, so that setup() allocates
+  /// nothing for them (a search whose nodes add and drop rows).
+  void reserve(std::size_t rows);
   /// The solution: states s_0..s_N and controls u_0..u_{N-1} in one vector per stage.
   [[nodiscard]] const std::vector<QpStageVector>& solution() const { return w_; }
   /// A starting guess for the controls (rolled out through the dynamics).
