@@ -477,11 +477,10 @@ bool modes_can_hold(const LaneChangeQp& qp, const std::vector<int>& modes) {
 
 namespace {
 
-// Room for every node QP and search of the round, made before it starts: the
-// most rows a node can carry (the base's, both bounds of every state
-// component, and its busiest mode's rows or its ramp), a stack as deep as a
-// depth-first search over the nodes' modes can grow, and node paths.
-void reserve_for_search(const LaneChangeQp& qp, FastWorkspace& ws) {
+// Room for every node QP of the round, made before it starts: the most rows
+// a node can carry (the base's, both bounds of every state component, and its
+// busiest mode's rows or its ramp), and node paths.
+void reserve_for_node_qps(const LaneChangeQp& qp, FastWorkspace& ws) {
   const int n = qp.steps;
   constexpr std::size_t kStateBoundRows = 8;  // both bounds of x, y, v and theta
   std::size_t rows = 0;
@@ -493,17 +492,7 @@ void reserve_for_search(const LaneChangeQp& qp, FastWorkspace& ws) {
     rows += stage_rows;
   }
   ws.qp_workspace.reserve(rows);
-  ws.child_order.reserve(4);
-  for (std::vector<int>* modes : {&ws.root_modes, &ws.switch_modes, &ws.switch_trial,
-                                  &ws.fixed_modes, &ws.start_modes[0], &ws.start_modes[1]}) {
-    modes->reserve(static_cast<std::size_t>(n) + 1);
-  }
-  const std::size_t deepest = 3 * (static_cast<std::size_t>(n) + 1);
-  ws.stack.reserve(deepest);
-  ws.spare_modes.reserve(deepest);
-  while (ws.spare_modes.size() + ws.stack.size() < deepest) {
-    ws.spare_modes.emplace_back().reserve(static_cast<std::size_t>(n) + 1);
-  }
+  ws.fixed_modes.reserve(static_cast<std::size_t>(n) + 1);
   constexpr std::size_t kPaths = 8;  // more than a search holds at once
   ws.spare_paths.reserve(2 * kPaths);
   while (ws.spare_paths.size() < kPaths) {
@@ -533,7 +522,7 @@ void prepare_round(const LaneChangeQp& qp, const SolveHints& hints, FastWorkspac
   for (Control& u : ws.start_controls) {
     u = u.cwiseMax(qp.control_lower + margin).cwiseMin(qp.control_upper - margin);
   }
-  reserve_for_search(qp, ws);
+  reserve_for_node_qps(qp, ws);
   ws.possible_modes.assign(n + 1, ~0U);
   ws.reach_lower.assign(n + 1, State::Constant(-kInfinity));
   ws.reach_upper.assign(n + 1, State::Constant(kInfinity));
@@ -672,6 +661,24 @@ void rounded_modes(const LaneChangeQp& qp, const FastWorkspace& ws, const Iterat
   modes.assign(qp.steps + 1, kFree);
   for (int k = 1; k <= qp.steps; ++k) {
     modes[k] = qp.best_mode(path, k, ws.possible_modes[static_cast<std::size_t>(k)]);
+  }
+}
+
+// Room for the search of a round, made before it starts: a stack as deep as
+// a depth-first search over the nodes' modes can grow, with a mode list for
+// each entry, and the lists of the root and of the incumbent search.
+void reserve_for_search(int steps, FastWorkspace& ws) {
+  const auto nodes = static_cast<std::size_t>(steps) + 1;
+  ws.child_order.reserve(4);
+  for (std::vector<int>* modes : {&ws.root_modes, &ws.switch_modes, &ws.switch_trial,
+                                  &ws.start_modes[0], &ws.start_modes[1]}) {
+    modes->reserve(nodes);
+  }
+  const std::size_t deepest = 3 * nodes;
+  ws.stack.reserve(deepest);
+  ws.spare_modes.reserve(deepest);
+  while (ws.spare_modes.size() + ws.stack.size() < deepest) {
+    ws.spare_modes.emplace_back().reserve(nodes);
   }
 }
 
@@ -943,6 +950,7 @@ void FastLaneChangeSolver::solve_into(const LaneChangeQp& qp, const MiqpSettings
   out.clear();
   ws.iterations = 0;
   if (!pre_check(qp, hints, options_.reachable_modes, ws, out)) return;
+  reserve_for_search(qp.steps, ws);
   std::vector<int>& root_modes = ws.root_modes;
   root_modes.assign(qp.steps + 1, kFree);
   NodeOutcome root = solve_node(qp, root_modes, ws);
