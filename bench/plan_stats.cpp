@@ -5,20 +5,24 @@
 // incumbents apart), interior-point iterations and CPU time, then the
 // median and mean plan and the totals. Not a timing claim of its own (the
 // benchmarks make those); it shows which plans and rounds carry the mean.
-//   plan_stats [COUNT=100] [--quiet] [--fixed-gap] [--target-lane-cars N]
-// --fixed-gap plans through Eq. 1's gap alone (expert.gap = fixed);
+//   plan_stats [COUNT=100] [--quiet] [--config FILE] [--fixed-gap] [--target-lane-cars N]
+// --config plans under a configuration file (docs/config.md) instead of the
+// defaults, to compare search settings; --fixed-gap plans through Eq. 1's gap alone (expert.gap =
+// fixed);
 // --target-lane-cars samples dense scenes with N cars in the target lane.
 
 #include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <exception>
 #include <map>
 #include <memory>
 #include <numeric>
 #include <string>
 #include <vector>
 
+#include "lanechange/config.hpp"
 #include "lanechange/expert/planner.hpp"
 #include "lanechange/sampler.hpp"
 #include "thread_cpu.hpp"
@@ -40,6 +44,15 @@ int main(int argc, char** argv) {
   const int count = argc > 1 ? std::atoi(argv[1]) : 100;
   bool quiet = false;
   lc::Config config;
+  for (int i = 2; i + 1 < argc; ++i) {
+    if (std::strcmp(argv[i], "--config") != 0) continue;
+    try {
+      config = lc::load_config(argv[i + 1]);
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "plan_stats: %s\n", e.what());
+      return 2;
+    }
+  }
   for (int i = 2; i < argc; ++i) {
     quiet = quiet || std::strcmp(argv[i], "--quiet") == 0;
     if (std::strcmp(argv[i], "--fixed-gap") == 0) config.expert.gap = lc::GapChoice::Fixed;
