@@ -11,12 +11,15 @@
 #include <cstdlib>
 #include <memory>
 #include <new>
+#include <string>
 #include <vector>
 
 #include "lanechange/expert/planner.hpp"
+#include "lanechange/learn/policy.hpp"
 #include "lanechange/sampler.hpp"
 #include "lanechange/sim/simulator.hpp"
 #include "planner/miqp_planner.hpp"
+#include "scripted_learner.hpp"
 
 namespace {
 
@@ -171,6 +174,68 @@ TEST(Allocations, AMiqpStepThatFollowsANewPlanAllocatesNothingOnceItsSessionHasP
   }
   // Most steps follow a new plan.
   EXPECT_GE(counted, planned / 2);
+}
+
+// mlp-miqp's network steps: the network (here a lane keeper that steers into
+// the target lane) and the look-ahead check, which each step extends by one node.
+TEST(Allocations, AnMlpMiqpNetworkStepAllocatesNothingOnceItsSessionHasStepped) {
+  const Config config;
+  const planner::LaneKeeper keeper(config);
+  const planner::MlpMiqpPlanner mlp =
+      testing::scripted_learner(config, Label::WellPosed, [&keeper](const planner::Observation& o) {
+        return keeper.control(o.ego, o.scene->lane_width, std::nullopt);
+      });
+  const CountingPlanner counting(mlp);
+  const std::vector<Scenario> scenes = mixed_scenes();
+  int counted = 0;
+  for (std::size_t i = 0; i < scenes.size(); i += 3) {
+    (void)sim::simulate(scenes[i], counting, config);
+    const auto& steps = counting.steps();
+    for (std::size_t k = 2; k < steps.size(); ++k) {
+      const planner::Decision& d = steps[k].decision;
+      if (d.status != planner::ActStatus::Planned || !d.reason.empty()) continue;
+      EXPECT_EQ(steps[k].allocations, 0) << "scene " << i << ", step " << k;
+      ++counted;
+    }
+  }
+  EXPECT_GE(counted, 50);
+}
+
+// The action network itself, the other half of a network step: widths on
+// both of its product paths (lazy up to kLazyWidth, GEMV above) and an ensemble.
+learn::PolicyWeights random_network(int inputs, int width, unsigned seed) {
+  std::srand(seed);
+  learn::PolicyWeights w;
+  for (int i = 0; i < inputs; ++i) w.inputs.push_back("input" + std::to_string(i));
+  w.outputs = {"a", "omega"};
+  w.input_mean = Eigen::VectorXd::Random(inputs);
+  w.input_scale = Eigen::VectorXd::Constant(inputs, 2.0);
+  w.output_mean = Eigen::VectorXd::Zero(learn::kActions);
+  w.output_scale = Eigen::VectorXd::Ones(learn::kActions);
+  int in = inputs;
+  for (int l = 0; l <= learn::kHiddenLayers; ++l) {
+    const int out = l == learn::kHiddenLayers ? learn::kActions : width;
+    w.weights.push_back(Eigen::MatrixXf::Random(out, in));
+    w.biases.push_back(Eigen::VectorXf::Random(out));
+    in = out;
+  }
+  return w;
+}
+
+TEST(Allocations, APolicysActionAllocatesNothing) {
+  constexpr int kInputs = 28;
+  const std::vector<learn::Policy> policies{
+      learn::Policy(random_network(kInputs, learn::kHiddenWidth, 1)),
+      learn::Policy(random_network(kInputs, learn::kMaxHiddenWidth, 2)),
+      learn::Policy(std::vector{random_network(kInputs, 32, 3), random_network(kInputs, 32, 4),
+                                random_network(kInputs, 32, 5)})};
+  for (const learn::Policy& policy : policies) {
+    const learn::Observation x = learn::Observation::Random(kInputs);
+    Eigen::Vector2d u;
+    const long count = allocations_of([&] { u = policy.act(x); });
+    EXPECT_EQ(count, 0) << "width " << policy.width() << ", members " << policy.members();
+    EXPECT_TRUE(u.allFinite());
+  }
 }
 
 }  // namespace
