@@ -14,6 +14,7 @@
 #include <thread>
 
 #include "lanechange/data/dataset.hpp"
+#include "run_then_summarize.hpp"
 
 namespace lc = lanechange;
 
@@ -80,11 +81,4 @@ void print_context() {
 
 }  // namespace
 
-int main(int argc, char** argv) {
-  benchmark::Initialize(&argc, argv);
-  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
-  benchmark::RunSpecifiedBenchmarks();
-  benchmark::Shutdown();
-  print_context();
-  return 0;
-}
+int main(int argc, char** argv) { return run_then_summarize(argc, argv, print_context); }

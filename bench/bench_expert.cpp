@@ -25,6 +25,7 @@
 #include "lanechange/expert/planner.hpp"
 #include "lanechange/run/quantile.hpp"
 #include "lanechange/sampler.hpp"
+#include "run_then_summarize.hpp"
 #include "thread_cpu.hpp"
 
 namespace {
@@ -348,11 +349,4 @@ BENCHMARK(BM_FastPlan)->Unit(benchmark::kMillisecond)->Iterations(300);
 BENCHMARK(BM_FastPlanFixedGap)->Unit(benchmark::kMillisecond)->Iterations(300);
 BENCHMARK(BM_FastPlanEightCars)->Unit(benchmark::kMillisecond)->Iterations(100);
 
-int main(int argc, char** argv) {
-  benchmark::Initialize(&argc, argv);
-  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
-  benchmark::RunSpecifiedBenchmarks();
-  benchmark::Shutdown();
-  print_summary();
-  return 0;
-}
+int main(int argc, char** argv) { return run_then_summarize(argc, argv, print_summary); }

@@ -19,6 +19,7 @@
 #include "lanechange/expert/crosscheck.hpp"
 #include "lanechange/run/quantile.hpp"
 #include "lanechange/sampler.hpp"
+#include "run_then_summarize.hpp"
 #include "thread_cpu.hpp"
 
 namespace lc = lanechange;
@@ -173,11 +174,4 @@ void print_summary() {
 BENCHMARK(BM_NodeQpIteration)->Unit(benchmark::kMillisecond)->Iterations(200);
 BENCHMARK(BM_RiccatiLimit)->Unit(benchmark::kMillisecond)->Iterations(200);
 
-int main(int argc, char** argv) {
-  benchmark::Initialize(&argc, argv);
-  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
-  benchmark::RunSpecifiedBenchmarks();
-  benchmark::Shutdown();
-  print_summary();
-  return 0;
-}
+int main(int argc, char** argv) { return run_then_summarize(argc, argv, print_summary); }
