@@ -7,9 +7,9 @@
 // benchmarks make those); it shows which plans and rounds carry the mean.
 //   plan_stats [COUNT=100] [--quiet] [--config FILE] [--fixed-gap] [--target-lane-cars N]
 // --config plans under a configuration file (docs/config.md) instead of the
-// defaults, to compare search settings; --fixed-gap plans through Eq. 1's gap alone (expert.gap =
-// fixed);
-// --target-lane-cars samples dense scenes with N cars in the target lane.
+// defaults, to compare search settings; --fixed-gap plans through Eq. 1's gap
+// alone (expert.gap = fixed); --target-lane-cars samples dense scenes with N
+// cars in the target lane.
 
 #include <algorithm>
 #include <cstdio>

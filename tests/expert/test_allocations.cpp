@@ -111,6 +111,13 @@ TEST(Allocations, APlanAllocatesNothingOnceItsThreadHasPlannedTheSceneBefore) {
   EXPECT_GE(failed, 2);
 }
 
+// A step that planned anew, or whose network drove: it says nothing. A step
+// that falls back, follows an old plan or hands over says why in words,
+// which it may allocate.
+bool planned_anew(const planner::Decision& d) {
+  return d.status == planner::ActStatus::Planned && d.reason.empty();
+}
+
 // Counts the allocations of each step of the sessions it starts.
 class CountingPlanner final : public planner::ClosedLoopPlanner {
  public:
@@ -159,15 +166,11 @@ TEST(Allocations, AMiqpStepThatFollowsANewPlanAllocatesNothingOnceItsSessionHasP
     const auto& steps = counting.steps();
     ASSERT_FALSE(steps.empty());
     // The first new plan sizes the session's memory (a first step cut by its
-    // work budget falls back and plans nothing); a step that falls back or
-    // follows an old plan says why in words, which it may allocate.
-    auto new_plan = [](const planner::Decision& d) {
-      return d.status == planner::ActStatus::Planned && d.reason.empty();
-    };
+    // work budget falls back and plans nothing).
     const auto first = std::find_if(steps.begin(), steps.end(),
-                                    [&](const auto& step) { return new_plan(step.decision); });
+                                    [](const auto& step) { return planned_anew(step.decision); });
     for (auto k = static_cast<std::size_t>(first - steps.begin()) + 1; k < steps.size(); ++k) {
-      if (!new_plan(steps[k].decision)) continue;
+      if (!planned_anew(steps[k].decision)) continue;
       EXPECT_EQ(steps[k].allocations, 0) << "scene " << i << ", step " << k;
       ++counted;
     }
@@ -177,20 +180,16 @@ TEST(Allocations, AMiqpStepThatFollowsANewPlanAllocatesNothingOnceItsSessionHasP
   EXPECT_GE(counted, planned / 2);
 }
 
-// Network steps of an mlp-miqp session whose scripted network is `drive`,
-// each after the session's first two (the look-ahead window built): their
-// allocations, into `counts`.
+// The allocations of mlp-miqp's network steps in rollouts of `scenes`, each
+// after its session's first two (the look-ahead window built), into `counts`.
 void count_network_steps(const planner::MlpMiqpPlanner& mlp, const std::vector<Scenario>& scenes,
-                         std::vector<long>& counts) {
+                         const Config& config, std::vector<long>& counts) {
   const CountingPlanner counting(mlp);
   for (const Scenario& scene : scenes) {
-    (void)sim::simulate(scene, counting, Config{});
+    (void)sim::simulate(scene, counting, config);
     const auto& steps = counting.steps();
     for (std::size_t k = 2; k < steps.size(); ++k) {
-      const planner::Decision& d = steps[k].decision;
-      if (d.status == planner::ActStatus::Planned && d.reason.empty()) {
-        counts.push_back(steps[k].allocations);
-      }
+      if (planned_anew(steps[k].decision)) counts.push_back(steps[k].allocations);
     }
   }
 }
@@ -214,8 +213,8 @@ TEST(Allocations, AnMlpMiqpNetworkStepAllocatesNothingOnceItsSessionHasStepped) 
   // Two three-car and two dense scenes for the lane keeper: the sanitizer
   // build runs the whole test in about a minute.
   std::vector<long> keeping, changing;
-  count_network_steps(keeps, {scenes[0], scenes[6], scenes[12], scenes[18]}, keeping);
-  count_network_steps(changes, {scenes[3], scenes[9], scenes[14]}, changing);
+  count_network_steps(keeps, {scenes[0], scenes[6], scenes[12], scenes[18]}, config, keeping);
+  count_network_steps(changes, {scenes[3], scenes[9], scenes[14]}, config, changing);
   for (const auto* counts : {&keeping, &changing}) {
     EXPECT_GE(counts->size(), 50U) << "too few network steps to count";
     EXPECT_EQ(std::count(counts->begin(), counts->end(), 0L), std::ssize(*counts));
