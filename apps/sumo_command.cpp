@@ -39,7 +39,8 @@ void run_episode(SumoArgs& a, const Config& given) {
                      {"scenes", r.scenes},
                      {"median_step_ms", run::nearest_rank(r.sumo_step_ms, 0.5)},
                      {"max_step_ms", run::nearest_rank(r.sumo_step_ms, 1.0)},
-                     {"max_pose_error", r.max_pose_error}};
+                     {"max_pose_error", r.max_pose_error},
+                     {"follower_braking", r.follower_braking}};
   sim::save_rollout(r.rollout, a.out_path);
   const auto& m = r.rollout.metrics;
   std::cerr << "outcome " << sim::to_string(r.rollout.outcome)
@@ -47,7 +48,8 @@ void run_episode(SumoArgs& a, const Config& given) {
             << r.rollout.steps.size() << " steps, " << r.scene.car_count()
             << " car tracks, planner median step " << m.median_step_ms << " ms, SUMO median step "
             << run::nearest_rank(r.sumo_step_ms, 0.5) << " ms, forced braking " << m.forced_decel
-            << " m/s^2" << (r.rollout.reason.empty() ? "" : "; " + r.rollout.reason) << "\n";
+            << " m/s^2 (the cars behind it braked " << r.follower_braking << ")"
+            << (r.rollout.reason.empty() ? "" : "; " + r.rollout.reason) << "\n";
 }
 
 }  // namespace

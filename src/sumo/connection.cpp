@@ -179,15 +179,26 @@ void SumoConnection::cars_near(const RoadFrame& frame, double x, double reach,
   }
 }
 
-double SumoConnection::cars_behind_ego(const std::vector<SumoCar>& cars,
-                                       std::set<std::string>& followers) const {
-  double hardest = 0.0;
+FollowerBraking SumoConnection::cars_behind_ego(const std::vector<SumoCar>& cars, double dt,
+                                                std::set<std::string>& followers) const {
+  using libsumo::Vehicle;
+  FollowerBraking hardest;
+  const double ego_speed = Vehicle::getSpeed(kEgoId);
+  const double ego_decel = Vehicle::getDecel(kEgoId);
   for (const SumoCar& car : cars) {
     // A car of the ego lane has followed the ego from the start: its
     // braking is no cut-in's.
-    if (car.lane != Lane::Target || libsumo::Vehicle::getLeader(car.id).first != kEgoId) continue;
+    if (car.lane != Lane::Target) continue;
+    const auto [leader, gap] = Vehicle::getLeader(car.id);
+    if (leader != kEgoId) continue;
     followers.insert(car.id);
-    hardest = std::max(hardest, -car.state.a);
+    // SUMO's cars also brake to open a gap the ego signals for, at up to
+    // their full deceleration, where following the ego needs none: that is
+    // SUMO's cooperation, not braking the cut-in forced.
+    const double safe_speed =
+        Vehicle::getFollowSpeed(car.id, car.state.v, gap, ego_speed, ego_decel, kEgoId);
+    hardest.forced = std::max(hardest.forced, (car.state.v - safe_speed) / dt);
+    hardest.actual = std::max(hardest.actual, -car.state.a);
   }
   return hardest;
 }

@@ -36,6 +36,16 @@ struct SumoContact {
   bool ego_collider = false;  ///< SUMO names the ego the collider (it ran into the other)
 };
 
+/// How hard the cars behind the ego brake, m/s^2 (0: none).
+struct FollowerBraking {
+  /// What each car's own car-following model demands with the ego as its
+  /// leader: the braking the ego's place forces on it.
+  double forced = 0.0;
+  /// What the cars did, their yielding to the ego's signalled change and
+  /// their driver imperfection included.
+  double actual = 0.0;
+};
+
 /// The ego's id in SUMO.
 inline constexpr const char* kEgoId = "ego";
 
@@ -88,8 +98,9 @@ class SumoConnection {
   void cars_near(const RoadFrame& frame, double x, double reach, std::vector<SumoCar>& out) const;
   /// The target-lane cars among `cars` whose leader in SUMO is the ego (the
   /// ego cut in ahead of them): their ids are added to `followers`; returns
-  /// their hardest braking (m/s^2, 0: none).
-  double cars_behind_ego(const std::vector<SumoCar>& cars, std::set<std::string>& followers) const;
+  /// their hardest braking, forced and actual, over the next step of `dt` s.
+  [[nodiscard]] FollowerBraking cars_behind_ego(const std::vector<SumoCar>& cars, double dt,
+                                                std::set<std::string>& followers) const;
   /// The contacts with the ego SUMO reported in the last step.
   [[nodiscard]] std::vector<SumoContact> ego_contacts() const;
 };

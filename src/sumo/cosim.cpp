@@ -205,7 +205,9 @@ class Episode {
       contacts_.push_back({c, (k + 1) * dt});
     }
     read_cars();
-    forced_decel_ = std::max(forced_decel_, sumo_.cars_behind_ego(near_, out.followers));
+    const detail::FollowerBraking braking = sumo_.cars_behind_ego(near_, dt, out.followers);
+    forced_decel_ = std::max(forced_decel_, braking.forced);
+    out.follower_braking = std::max(out.follower_braking, braking.actual);
     return ms;
   }
 

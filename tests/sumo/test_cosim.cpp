@@ -25,14 +25,26 @@ HighwaySettings busy_highway() {
   return h;
 }
 
-CoSimResult run_miqp(const HighwaySettings& highway, const testing::TempDir& dir,
-                     bool signal_change = true) {
+CoSimResult run_planner(const std::string& name, const HighwaySettings& highway,
+                        const testing::TempDir& dir, bool signal_change = true) {
   const Config config = as_sumo_drives(testing::untimed_config());
-  const auto planner = baselines::make_planner("miqp", config);
+  const auto planner = baselines::make_planner(name, config);
   CoSimSettings settings;
   settings.signal_change = signal_change;
   settings.work_dir = dir.path().string() + "/sumo";
   return run_highway(*planner, config, highway, settings);
+}
+
+CoSimResult run_miqp(const HighwaySettings& highway, const testing::TempDir& dir,
+                     bool signal_change = true) {
+  return run_planner("miqp", highway, dir, signal_change);
+}
+
+HighwaySettings dense_highway(int seed) {
+  HighwaySettings h;
+  h.density = 40.0;
+  h.seed = seed;
+  return h;
 }
 
 TEST(SumoHighway, TheExpertChangesLanesAndTheCarBehindFollowsTheEgo) {
@@ -67,9 +79,7 @@ TEST(SumoHighway, TheExpertChangesLanesAndTheCarBehindFollowsTheEgo) {
 // the expert merges where the ego asks SUMO for the change and SUMO's cars
 // cooperate, and stays in its lane where it does not ask.
 TEST(SumoHighway, TheTargetLaneOpensAGapForAnEgoThatSignals) {
-  HighwaySettings dense;
-  dense.density = 40.0;
-  dense.seed = 2;
+  const HighwaySettings dense = dense_highway(2);
   const testing::TempDir dir;
   const CoSimResult signalled = run_miqp(dense, dir, true);
   EXPECT_EQ(signalled.rollout.outcome, sim::Outcome::WellPosed) << signalled.rollout.reason;
@@ -78,6 +88,31 @@ TEST(SumoHighway, TheTargetLaneOpensAGapForAnEgoThatSignals) {
   const testing::TempDir silent_dir;
   const CoSimResult silent = run_miqp(dense, silent_dir, false);
   EXPECT_EQ(silent.rollout.outcome, sim::Outcome::Aborted) << silent.rollout.reason;
+}
+
+// SUMO's car behind the gap yields to the ego's signal at its full 4.5
+// m/s^2 (40 cars per lane and km, seed 8), where following the ego, once the
+// ego leads it, demands no braking: the cut-in forced nothing.
+TEST(SumoHighway, ACarYieldingToTheSignalIsNotCountedAsForcedByTheCutIn) {
+  const double unsafe = testing::untimed_config().closed_loop.unsafe_decel;
+  const testing::TempDir dir;
+  const CoSimResult r = run_miqp(dense_highway(8), dir);
+  ASSERT_EQ(r.rollout.outcome, sim::Outcome::WellPosed) << r.rollout.reason;
+  EXPECT_GT(r.follower_braking, unsafe);
+  EXPECT_LT(r.rollout.forced_decel, unsafe);
+  EXPECT_FALSE(r.rollout.metrics.unsafe_cut_in);
+}
+
+// `mpc` cuts in so close ahead of a target-lane car (40 cars per lane and
+// km, seed 4) that its own car-following must brake harder than the judge's
+// safe deceleration.
+TEST(SumoHighway, ACutInCloseAheadOfACarIsCountedAsForcingItsBraking) {
+  const double unsafe = testing::untimed_config().closed_loop.unsafe_decel;
+  const testing::TempDir dir;
+  const CoSimResult r = run_planner("mpc", dense_highway(4), dir);
+  EXPECT_GT(r.rollout.forced_decel, unsafe);
+  EXPECT_TRUE(r.rollout.metrics.unsafe_cut_in);
+  EXPECT_FALSE(r.followers.empty());
 }
 
 TEST(SumoHighway, SumosEgoIsOursAfterEveryStep) {

@@ -63,6 +63,10 @@ struct CoSimResult {
   double max_pose_error = 0.0;       ///< m: the largest distance between SUMO's ego and ours
   /// SUMO's cars that followed the ego (SUMO named it their leader) at some step.
   std::set<std::string> followers;
+  /// m/s^2: the hardest braking of a car of `followers` while the ego led it,
+  /// for any cause. The rollout's forced_decel counts only what the car's
+  /// following of the ego demanded (docs/sumo.md).
+  double follower_braking = 0.0;
 };
 
 /// The config a SUMO run's planners plan with: SUMO's cars as SUMO drives
