@@ -258,6 +258,11 @@ const RoundSolution& solve_round(const RoundContext& c, const Iterate& point, do
         best.solution.has_solution() ? cutoff_below(best.solution.objective) : kInfinity;
     solve_gap(c, gap, warm_start_per_gap ? c.memory.gap_point : point, radius, cutoff, result, s);
     add_work(work, s);
+    if (warm_start_per_gap && s.status == MiqpStatus::Infeasible &&
+        paced_warm_start(c.scenario, c.config, c.memory.round_start, gap, c.memory.gap_point)) {
+      solve_gap(c, gap, c.memory.gap_point, radius, cutoff, result, s);
+      add_work(work, s);
+    }
     const bool better = s.status == MiqpStatus::Optimal && s.has_solution() &&
                         (!best.solution.has_solution() || s.objective < best.solution.objective);
     const bool failed = s.status != MiqpStatus::Infeasible && s.status != MiqpStatus::Cutoff &&

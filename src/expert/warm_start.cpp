@@ -70,15 +70,55 @@ double quintic_time_at(double level) {
   return 0.5 * (lo + hi);
 }
 
-// The warm start's states: x and speed from a quintic toward the gap's aim
-// point, with the given lateral motion (value and rate in t). The caller
-// fills the controls once its states are final.
+// Where the warm start ends: the gap's aim (behind its car ahead).
+GapAim gap_aim(const Scenario& s, const Config& c, const TrafficPrediction& p, const Gap& gap) {
+  return aim_into(s, c, p, gap, std::min(s.steps, p.nodes() - 1));
+}
+
+// Whether the ego can be at x at the horizon's end, between braking to its
+// lowest speed and speeding up to its highest.
+bool reachable(const Scenario& s, double x) {
+  const double T = s.horizon;
+  const double v0 = s.ego.v * std::cos(s.ego.theta);
+  const auto travel = [&](double accel, double bound) {
+    const double t = std::clamp((bound - v0) / accel, 0.0, T);
+    return v0 * t + 0.5 * accel * t * t + bound * (T - t);
+  };
+  return x >= s.ego.x + travel(s.limits.a.lo, s.limits.v.lo) &&
+         x <= s.ego.x + travel(s.limits.a.hi, s.limits.v.hi);
+}
+
+// Where the ego's own pace takes it, if that lies in the gap (ahead of its
+// car behind, behind its car ahead, each by its safe distance); else the
+// gap's nearer end, at that car's speed; the gap's aim where the gap is
+// shorter than the two safe distances.
+GapAim paced_aim(const Scenario& s, const Config& c, const TrafficPrediction& p, const Gap& gap) {
+  const GapAim edge = gap_aim(s, c, p, gap);
+  const double pace = s.ego.x + s.ego.v * std::cos(s.ego.theta) * s.horizon;
+  const GapAim own{pace, s.ego.v, 0.0};
+  const auto behind = gap.car_behind();
+  if (!gap.car_ahead()) return behind && pace < edge.x ? edge : own;
+  if (behind) {
+    const CarTrack& car = p.car(*behind);
+    const auto at = static_cast<std::size_t>(std::min(s.steps, p.nodes() - 1));
+    const SafeDistance d = s.centre_safe_distance(*behind, s.safe_distance.follower);
+    const double margin =
+        c.expert.aim_behind_target ? d.standstill + d.time_headway * car.v[at] : 0.0;
+    const GapAim back{car.x[at] + margin, car.v[at], car.a[at]};
+    if (back.x > edge.x) return edge;
+    if (pace < back.x) return back;
+  }
+  return pace > edge.x ? edge : own;
+}
+
+// The warm start's states: x and speed from a quintic toward `end_state`,
+// with the given lateral motion (value and rate in t). The caller fills the
+// controls once its states are final.
 template <class Lateral>
-void quintic_path(const Scenario& s, const Config& c, const TrafficPrediction& p,
-                  const Lateral& lateral, const Gap& gap, Iterate& path) {
+void quintic_path(const Scenario& s, const Lateral& lateral, const GapAim& end_state,
+                  Iterate& path) {
   const double T = s.horizon;
   const double dt = T / s.steps;
-  const GapAim end_state = aim_into(s, c, p, gap, std::min(s.steps, p.nodes() - 1));
   const double end_speed = std::clamp(end_state.v, s.limits.v.lo, s.limits.v.hi);
   // A target far behind would make the path run backwards; the guess is only a
   // linearization point, so keep it moving forward.
@@ -94,10 +134,9 @@ void quintic_path(const Scenario& s, const Config& c, const TrafficPrediction& p
   }
 }
 
-void quintic_warm_start(const Scenario& s, const Config& c, const TrafficPrediction& p,
-                        const Gap& gap, Iterate& path) {
+void quintic_warm_start(const Scenario& s, const GapAim& end_state, Iterate& path) {
   const Quintic y(s.ego.y, s.ego.v * std::sin(s.ego.theta), 0.0, s.lane_width, 0.0, 0.0, s.horizon);
-  quintic_path(s, c, p, y, gap, path);
+  quintic_path(s, y, end_state, path);
   fill_controls(path, s.horizon / s.steps);
 }
 
@@ -155,7 +194,8 @@ Iterate warm_start_for_modes(const Scenario& scenario, const Config& config,
   // Under the either-or rule a node is in one lane or the other.
   if (touches >= 0 && across < 0 && rule == LaneRule::EitherOr) across = touches;
   Iterate path;
-  quintic_path(scenario, config, prediction, move_timed_to(scenario, touches, across), gap, path);
+  quintic_path(scenario, move_timed_to(scenario, touches, across),
+               gap_aim(scenario, config, prediction, gap), path);
   // The flat start would give node 0 no heading; it has the ego's.
   path.states.front() = State(scenario.ego.x, scenario.ego.y, scenario.ego.v, scenario.ego.theta);
   fill_controls(path, scenario.horizon / scenario.steps);
@@ -172,8 +212,20 @@ void warm_start(const Scenario& scenario, const Config& config, const TrafficPre
   if (config.expert.warm_start == WarmStart::Authors) {
     authors_warm_start(scenario, prediction, out);
   } else {
-    quintic_warm_start(scenario, config, prediction, gap, out);
+    quintic_warm_start(scenario, gap_aim(scenario, config, prediction, gap), out);
   }
+}
+
+// A round about a path the ego cannot drive (aimed behind a car far ahead, or
+// ahead of one far behind) can call a gap infeasible that is not.
+bool paced_warm_start(const Scenario& scenario, const Config& config,
+                      const TrafficPrediction& prediction, const Gap& gap, Iterate& out) {
+  if (config.expert.warm_start == WarmStart::Authors ||
+      reachable(scenario, gap_aim(scenario, config, prediction, gap).x)) {
+    return false;
+  }
+  quintic_warm_start(scenario, paced_aim(scenario, config, prediction, gap), out);
+  return true;
 }
 
 Iterate warm_start(const Scenario& scenario, const Config& config,

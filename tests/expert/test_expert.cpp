@@ -1172,6 +1172,33 @@ TEST(Planner, FindsTheOneOpenGapAmongEightCars) {
   EXPECT_NE(fixed.plan(s).status, PlanStatus::Converged);
 }
 
+// An ego half across the line, turning in at 0.17 rad, whose target lane
+// holds only cars far behind it (and far ahead): the lane is open, and the
+// plan finishes the change. The first round's warm starts aim at those
+// cars' safe distances, out of the ego's reach, and find every gap
+// infeasible; solved again about the ego's own pace, the open gap is not (a
+// SUMO scene, docs/expert.md).
+TEST(Planner, AnEgoMidChangeFinishesWhereTheTargetLaneCarsAreFar) {
+  for (const std::vector<double>& places : {std::vector<double>{-100.0}, {-82.0, 167.0}}) {
+    nlohmann::json j = testing::example_cars_json();
+    j["road"]["lane_width"] = 3.75;
+    j["ego"] = {{"x", 0.0}, {"y", 3.19}, {"v", 10.55}, {"theta", 0.167}, {"a", 0.0}};
+    j["cars"] = nlohmann::json::array();
+    for (const double x : places) {
+      std::string id = "t";  // appended: GCC 12 misreads "t" + to_string (-Wrestrict)
+      id += std::to_string(j["cars"].size());
+      j["cars"].push_back({{"id", id}, {"lane", "target"}, {"x", x}, {"v", 13.8}});
+    }
+    const Scenario s = scenario_from_json(j, Config{});
+    const ExpertPlanner planner(Config{}, std::make_shared<FastLaneChangeSolver>());
+    const ExpertResult r = planner.plan(s);
+    ASSERT_EQ(r.status, PlanStatus::Converged) << places.size() << " cars: " << r.reason;
+    const Trajectory t = planner.to_trajectory(r, s);
+    EXPECT_EQ(t.label, Label::WellPosed) << t.reason;
+    expect_audit_passes(t, s, Config{});
+  }
+}
+
 // A car behind the ego in its own lane keeps its distance too while the ego
 // is in that lane: braking hard in front of it is not a plan.
 TEST(Planner, KeepsTheDistanceToACarBehindInTheEgoLane) {

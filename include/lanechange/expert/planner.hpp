@@ -165,6 +165,14 @@ void warm_start(const Scenario& scenario, const Config& config, const TrafficPre
 /// The same aimed into Eq. 1's gap (paper_gap).
 [[nodiscard]] Iterate warm_start(const Scenario& scenario, const Config& config,
                                  const TrafficPrediction& prediction);
+/// A second quintic warm start into `gap`, for a first round that found the
+/// gap infeasible about warm_start()'s path: aimed where the ego's own pace
+/// takes it if that lies in the gap, else at the gap's nearer end. False,
+/// with `out` untouched, where warm_start()'s aim lies within the ego's reach
+/// at the horizon's end (that path is one the ego can drive), or the warm
+/// start is the authors'.
+bool paced_warm_start(const Scenario& scenario, const Config& config,
+                      const TrafficPrediction& prediction, const Gap& gap, Iterate& out);
 
 /// The quintic warm start with its lane change timed to `modes` (lane modes
 /// per node, as PlanHints::modes): the body first touches the line at the
