@@ -26,8 +26,9 @@ HighwaySettings busy_highway() {
 }
 
 CoSimResult run_planner(const std::string& name, const HighwaySettings& highway,
-                        const testing::TempDir& dir, bool signal_change = true) {
-  const Config config = as_sumo_drives(testing::untimed_config());
+                        const testing::TempDir& dir, bool signal_change = true,
+                        const Config& given = testing::untimed_config()) {
+  const Config config = as_sumo_drives(given);
   const auto planner = baselines::make_planner(name, config);
   CoSimSettings settings;
   settings.signal_change = signal_change;
@@ -105,11 +106,13 @@ TEST(SumoHighway, ACarYieldingToTheSignalIsNotCountedAsForcedByTheCutIn) {
 
 // `mpc` cuts in so close ahead of a target-lane car (40 cars per lane and
 // km, seed 4) that its own car-following must brake harder than the judge's
-// safe deceleration.
+// safe deceleration. Under the default deadline of work: without it `mpc`
+// stops at its own wall-clock limit, and a slower build would drive
+// otherwise.
 TEST(SumoHighway, ACutInCloseAheadOfACarIsCountedAsForcingItsBraking) {
-  const double unsafe = testing::untimed_config().closed_loop.unsafe_decel;
+  const double unsafe = Config{}.closed_loop.unsafe_decel;
   const testing::TempDir dir;
-  const CoSimResult r = run_planner("mpc", dense_highway(4), dir);
+  const CoSimResult r = run_planner("mpc", dense_highway(4), dir, true, Config{});
   EXPECT_GT(r.rollout.forced_decel, unsafe);
   EXPECT_TRUE(r.rollout.metrics.unsafe_cut_in);
   EXPECT_FALSE(r.followers.empty());
