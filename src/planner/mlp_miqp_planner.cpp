@@ -138,11 +138,21 @@ static MlpMiqpPlanner::Network network_of(std::shared_ptr<const learn::Model> mo
   };
 }
 
+// A name both lists know ("leader_a") is the gap view's for a network that
+// reads the gap: its data took it from the view, which also reads a scene
+// without a leader role.
 PolicyInputs::PolicyInputs(const std::vector<std::string>& names) {
   const auto& view = expert::gap_view_names();
+  const auto in_view = [&view](const std::string& name) {
+    return std::find(view.begin(), view.end(), name) != view.end();
+  };
+  reads_gap_ = std::any_of(names.begin(), names.end(), [&](const std::string& name) {
+    return in_view(name) && !input_sources().contains(name);
+  });
   for (const std::string& name : names) {
-    if (const auto it = input_sources().find(name); it != input_sources().end()) {
-      sources_.push_back({&it->second, 0});
+    const auto source = input_sources().find(name);
+    if (source != input_sources().end() && !(reads_gap_ && in_view(name))) {
+      sources_.push_back({&source->second, 0});
       continue;
     }
     const auto at = std::find(view.begin(), view.end(), name);
@@ -151,7 +161,6 @@ PolicyInputs::PolicyInputs(const std::vector<std::string>& names) {
                                     "\", which an observation does not give");
     }
     sources_.push_back({nullptr, static_cast<std::size_t>(at - view.begin())});
-    reads_gap_ = true;
   }
 }
 

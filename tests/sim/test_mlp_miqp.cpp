@@ -96,6 +96,36 @@ TEST(MlpMiqp, PolicyInputsReadTheChosenGapRelativeToTheEgo) {
   EXPECT_THROW(planner::PolicyInputs({"gap_beside_dx"}), InputError);
 }
 
+// A gap network reads the car ahead from the gap view, as its data did: a
+// scene without a leader (a free lane ahead, as SUMO's often are) reads as
+// an open lane, not as a missing role.
+TEST(MlpMiqp, AGapNetworkReadsASceneWithoutALeader) {
+  Scenario s = testing::dense_scenario(6);
+  std::erase_if(s.cars, [](const OtherCar& car) { return car.id == "lead"; });
+  for (const Role role : kRoles) s.roles[static_cast<std::size_t>(role)] = nearest_in_role(s, role);
+  ASSERT_FALSE(s.has(Role::Leader));
+  Observation o;
+  o.scene = &s;
+  o.ego = s.ego;
+  for (const OtherCar& car : s.cars) o.cars.push_back(car.state);
+  const auto gap = expert::gap_slots(s).gaps[expert::kGapSlotBeside];
+  ASSERT_TRUE(gap);
+  const planner::PolicyInputs inputs({"v", "gap_behind_dx", "leader_dx", "leader_a"});
+  ASSERT_TRUE(inputs.reads_gap());
+  learn::Observation x;
+  ASSERT_NO_THROW(x = inputs.read(o, expert::frame_of(*gap)));
+  const auto& names = expert::gap_view_names();
+  const auto view = expert::gap_view(s, o.cars, o.ego, expert::frame_of(*gap));
+  const auto at = [&names](const char* name) {
+    return static_cast<std::size_t>(std::find(names.begin(), names.end(), name) - names.begin());
+  };
+  EXPECT_EQ(x[2], view[at("leader_dx")]);
+  EXPECT_EQ(x[3], view[at("leader_a")]);
+  EXPECT_EQ(x[2], expert::kOpenGapDistance);
+  // The paper's network reads the leader by its role, as before.
+  EXPECT_FALSE(planner::PolicyInputs({"v", "leader_a"}).reads_gap());
+}
+
 // A "network" that steers hard into the target lane whatever is there.
 EgoControl swerve_left(const Observation&) { return {0.0, 0.26}; }
 
