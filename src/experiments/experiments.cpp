@@ -174,14 +174,17 @@ void evaluate_sets(const Context& c, const std::string& parent, const Config& co
 }
 
 // Every planner in SUMO traffic: the highway at each density, and the
-// CommonRoad interactive folders where the options name them.
+// CommonRoad interactive folders where the options name them. The learned
+// planners use the dense model, which reads any number of cars; the paper's
+// network needs a leader, a follower and a target, which SUMO's scenes often
+// lack, and hands those to the expert from the start.
 void evaluate_sumo(const Context& c, const std::vector<std::string>& planners) {
   sumo::EvaluateOptions e;
   e.densities = kSumoDensities;
   e.count = c.sizes.sumo_episodes;
   e.seed = kSumoSeed;
   e.planners = planners;
-  e.model_dir = path_in(c, "model");
+  e.model_dir = path_in(c, "dense/model");
   e.config = c.options.config;
   e.make_planner = baselines::make_planner;
   const auto run = run_options<sim::EvaluateRun>(c);
@@ -459,7 +462,6 @@ ExperimentReport run_experiments(const ExperimentOptions& o) {
   (void)stages.run("evaluate-dense", eval_inputs, {"eval/dense"}, StageRunner::Ranks::All, [&] {
     evaluate_sets(c, "eval/dense", dense_config(o.config), planners, "dense/model");
   });
-  eval_inputs.erase("dense_model");
   // And in SUMO's traffic, which reacts and changes lanes (docs/sumo.md).
   eval_inputs.erase("target_lane_cars");
   eval_inputs["count"] = c.sizes.sumo_episodes;

@@ -202,7 +202,8 @@ void sumo_section(Document& d, const ReportInputs& in) {
       " seeded episodes each (`lanechange evaluate --sumo-highway`); and, where the run names "
       "them, CommonRoad's interactive scenarios (`--commonroad DIR`: recorded cars from their "
       "recorded starts). Each rollout starts when the change is asked and lasts the horizon "
-      "plus `closed_loop.settle_time`. An unsafe cut-in made a SUMO car of the target lane "
+      "plus `closed_loop.settle_time`. `mlp-miqp` and `strategy-qp` use the dense model, "
+      "which reads any number of cars. An unsafe cut-in made a SUMO car of the target lane "
       "brake harder than `closed_loop.unsafe_decel`.");
   std::vector<std::string> groups;
   for (const auto& r : in.sumo) {
