@@ -116,6 +116,12 @@ struct ExpertSettings {
   double weight_yaw_rate = 1e-6;
   JerkWeighting jerk_weighting = JerkWeighting::Derivative;
   LaneRule lane_rule = LaneRule::Footprint;
+  /// m: under the footprint rule the ego counts as in both lanes, with every
+  /// target-lane distance, once its body comes this close to the line. A
+  /// plan that waits for a gap otherwise rides the line with its body at
+  /// it, where the cars behind in the target lane (SUMO's, a driver's)
+  /// already take it as cutting in (docs/expert.md). 0: the body's edge.
+  double line_clearance = 0.1;
   int max_iterations = 10;             ///< linearization rounds
   double convergence_tolerance = 0.1;  ///< m, largest change of x and y between rounds
   /// m: a round whose solution is this close to the one two rounds back,

@@ -141,6 +141,8 @@ void Config::validate() const {
           "must be in (0, 1)");
   require(expert.trust_rounds >= 1, "expert.trust_rounds", "must be at least 1");
   require(expert.big_m > 0, "expert.big_m", "must be positive");
+  require(expert.line_clearance >= 0 && expert.line_clearance <= 1, "expert.line_clearance",
+          "must be in [0, 1] m");
   require(std::isfinite(expert.min_turn_radius) && expert.min_turn_radius >= 0,
           "expert.min_turn_radius", "must be finite and not negative (0: off)");
   require(expert.prediction_lead_steps >= 0 && expert.prediction_lead_steps <= 10,
@@ -201,6 +203,7 @@ Config authors_preset() {
   c.expert.weight_terminal_x = 0.005;
   c.expert.jerk_weighting = JerkWeighting::Difference;
   c.expert.lane_rule = LaneRule::Footprint;
+  c.expert.line_clearance = 0.0;
   c.expert.constrain_initial_node = true;
   c.expert.prediction_lead_steps = 1;
   c.expert.warm_start = WarmStart::Authors;

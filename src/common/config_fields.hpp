@@ -142,6 +142,7 @@ void visit_fields(V& v, S& s) requires std::same_as<std::remove_const_t<S>, Expe
   v("weight_yaw_rate", s.weight_yaw_rate);
   v("jerk_weighting", s.jerk_weighting);
   v("lane_rule", s.lane_rule);
+  v("line_clearance", s.line_clearance);
   v("max_iterations", s.max_iterations);
   v("convergence_tolerance", s.convergence_tolerance);
   v("cycle_tolerance", s.cycle_tolerance);

@@ -351,6 +351,10 @@ GapAim aim_into(const Scenario& s, const Config& c, const TrafficPrediction& p, 
   return {s.ego.x + s.ego.v * s.horizon, s.ego.v, 0.0};
 }
 
+double footprint_half_width(const Scenario& s, const ExpertSettings& e) {
+  return 0.5 * s.vehicle.width + e.line_clearance;
+}
+
 std::string describe(const Scenario& s, const Gap& gap) {
   const auto name = [&s](std::optional<CarIndex> c) {
     return c ? s.cars[*c].id : std::string("none");
@@ -431,7 +435,7 @@ void build_lane_change_qp(const Scenario& s, const Config& config, const Iterate
   for (int k = e.constrain_initial_node ? 0 : 1; k <= n; ++k) {
     const int index = std::min(k + e.prediction_lead_steps, last_prediction);
     const Interval heading{qp.state_lower[k][kTheta], qp.state_upper[k][kTheta]};
-    const LaneGeometry lane{0.5 * s.lane_width, 0.5 * s.vehicle.width, 0.5 * s.vehicle.length,
+    const LaneGeometry lane{0.5 * s.lane_width, footprint_half_width(s, e), 0.5 * s.vehicle.length,
                             reachable_headings(s, heading, k * qp.dt)};
     // Node 0 is the given state: checked whole where the config constrains it.
     const double restore = e.restore_distance_within;

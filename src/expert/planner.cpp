@@ -482,8 +482,8 @@ void trust_region_rounds(const RoundContext& c, ExpertResult& result) {
 // Recorded traffic may start the ego closer than Eq. 1 allows. The plan then
 // fails where no node can restore the distance in time, and the reason says
 // so rather than blaming the lane sequence.
-std::string start_inside_safe_distance(const Scenario& s) {
-  const double half_width = 0.5 * s.vehicle.width;
+std::string start_inside_safe_distance(const Scenario& s, const ExpertSettings& e) {
+  const double half_width = footprint_half_width(s, e);
   const double boundary = 0.5 * s.lane_width;
   const bool in_ego_lane = s.ego.y - half_width < boundary;
   const bool in_target_lane = s.ego.y + half_width > boundary;
@@ -619,7 +619,7 @@ void ExpertPlanner::plan(const Scenario& scenario, const PlanLimits& limits, con
     trust_region_rounds(context, result);
   }
   if (result.status == PlanStatus::Infeasible) {
-    const std::string why = start_inside_safe_distance(scenario);
+    const std::string why = start_inside_safe_distance(scenario, config.expert);
     if (!why.empty()) result.reason += "; " + why;
   }
   result.total_ms = elapsed_ms(start);

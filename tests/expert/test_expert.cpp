@@ -2,8 +2,10 @@
 // and whole plans checked by the independent audit.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <limits>
 #include <memory>
 #include <nlohmann/json.hpp>
 
@@ -888,6 +890,38 @@ TEST(Planner, TakesTheOnlyOpenGapBehindTheFollower) {
   s.target() = {25.0, 14.0, 0.0};
   validate_scenario(s);
   expect_only_the_gap(s, {{}, {car_of(Role::Follower), car_of(Role::Target)}});
+}
+
+// The highest y of a plan's nodes in the ego-lane mode: where it waits for
+// the cars of the target lane to pass.
+double highest_ego_lane_node(const Scenario& s, double line_clearance) {
+  Config config;
+  config.expert.line_clearance = line_clearance;
+  const ExpertResult r = ExpertPlanner(config, std::make_shared<FastLaneChangeSolver>()).plan(s);
+  EXPECT_EQ(r.status, PlanStatus::Converged) << r.reason;
+  double highest = -std::numeric_limits<double>::infinity();
+  for (std::size_t k = 1; k < r.occupancy.size(); ++k) {
+    if (r.occupancy[k] == LaneOccupancy::EgoLane) highest = std::max(highest, r.path.states[k][kY]);
+  }
+  return highest;
+}
+
+// A plan that waits for its gap keeps its body expert.line_clearance off the
+// line; nearer, it counts as in both lanes, with the car behind the gap's
+// distance. Without the clearance it waits with its body at the line, where
+// a car behind in the target lane already takes it as cutting in.
+TEST(Planner, AWaitingPlanKeepsItsBodyClearOfTheLine) {
+  Scenario s = open_road_scenario();
+  s.ego.v = 10.0;
+  s.leader() = {50.0, 10.0, 0.0};
+  s.follower() = {5.0, 14.0, 0.0};
+  s.target() = {25.0, 14.0, 0.0};
+  validate_scenario(s);
+  const double body_at_line = 0.5 * (s.lane_width - s.vehicle.width);
+  EXPECT_NEAR(highest_ego_lane_node(s, 0.0), body_at_line, 1e-3);
+  const double clearance = Config{}.expert.line_clearance;
+  ASSERT_GT(clearance, 0.0);
+  EXPECT_NEAR(highest_ego_lane_node(s, clearance), body_at_line - clearance, 1e-3);
 }
 
 TEST(Gaps, FixedIsThePapersAndBestListsEveryPlaceFromTheBack) {

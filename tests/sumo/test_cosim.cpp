@@ -92,12 +92,12 @@ TEST(SumoHighway, TheTargetLaneOpensAGapForAnEgoThatSignals) {
 }
 
 // SUMO's car behind the gap yields to the ego's signal at its full 4.5
-// m/s^2 (40 cars per lane and km, seed 8), where following the ego, once the
+// m/s^2 (40 cars per lane and km, seed 16), where following the ego, once the
 // ego leads it, demands no braking: the cut-in forced nothing.
 TEST(SumoHighway, ACarYieldingToTheSignalIsNotCountedAsForcedByTheCutIn) {
   const double unsafe = testing::untimed_config().closed_loop.unsafe_decel;
   const testing::TempDir dir;
-  const CoSimResult r = run_miqp(dense_highway(8), dir);
+  const CoSimResult r = run_miqp(dense_highway(16), dir);
   ASSERT_EQ(r.rollout.outcome, sim::Outcome::WellPosed) << r.rollout.reason;
   EXPECT_GT(r.follower_braking, unsafe);
   EXPECT_LT(r.rollout.forced_decel, unsafe);

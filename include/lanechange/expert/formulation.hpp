@@ -130,6 +130,10 @@ struct GapAim {
 };
 [[nodiscard]] GapAim aim_into(const Scenario& scenario, const Config& config,
                               const TrafficPrediction& prediction, const Gap& gap, int node);
+/// Half the width the footprint lane rules give the ego's body: its own half
+/// width plus expert.line_clearance.
+[[nodiscard]] double footprint_half_width(const Scenario& scenario, const ExpertSettings& expert);
+
 /// "follower-target", "none-follower", ...: the ids of the framing cars,
 /// back first.
 [[nodiscard]] std::string describe(const Scenario& scenario, const Gap& gap);
