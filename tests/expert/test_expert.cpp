@@ -880,15 +880,9 @@ TEST(Planner, TakesTheOnlyOpenGapAheadOfTheTarget) {
   expect_only_the_gap(s, {{car_of(Role::Follower), car_of(Role::Target)}, {}});
 }
 
-// Both faster than the ego and too close together: only the gap behind the
-// follower is open.
+// Only the gap behind the follower is open (testing::only_the_gap_behind_the_follower).
 TEST(Planner, TakesTheOnlyOpenGapBehindTheFollower) {
-  Scenario s = open_road_scenario();
-  s.ego.v = 10.0;
-  s.leader() = {50.0, 10.0, 0.0};
-  s.follower() = {5.0, 14.0, 0.0};  // at Krauss's safe gap: neither brakes
-  s.target() = {25.0, 14.0, 0.0};
-  validate_scenario(s);
+  const Scenario s = testing::only_the_gap_behind_the_follower();
   expect_only_the_gap(s, {{}, {car_of(Role::Follower), car_of(Role::Target)}});
 }
 
@@ -911,12 +905,7 @@ double highest_ego_lane_node(const Scenario& s, double line_clearance) {
 // distance. Without the clearance it waits with its body at the line, where
 // a car behind in the target lane already takes it as cutting in.
 TEST(Planner, AWaitingPlanKeepsItsBodyClearOfTheLine) {
-  Scenario s = open_road_scenario();
-  s.ego.v = 10.0;
-  s.leader() = {50.0, 10.0, 0.0};
-  s.follower() = {5.0, 14.0, 0.0};
-  s.target() = {25.0, 14.0, 0.0};
-  validate_scenario(s);
+  const Scenario s = testing::only_the_gap_behind_the_follower();
   const double body_at_line = 0.5 * (s.lane_width - s.vehicle.width);
   EXPECT_NEAR(highest_ego_lane_node(s, 0.0), body_at_line, 1e-3);
   const double clearance = Config{}.expert.line_clearance;

@@ -242,4 +242,17 @@ inline Scenario only_the_gap_ahead_of_the_target() {
   return s;
 }
 
+// The follower and the target both faster than the ego and too close together
+// for it: only the gap behind the follower is open, and the ego waits in its
+// lane for both to pass.
+inline Scenario only_the_gap_behind_the_follower() {
+  Scenario s = open_road_scenario();
+  s.ego.v = 10.0;
+  s.leader() = {50.0, 10.0, 0.0};
+  s.follower() = {5.0, 14.0, 0.0};  // at Krauss's safe gap: neither brakes
+  s.target() = {25.0, 14.0, 0.0};
+  validate_scenario(s);
+  return s;
+}
+
 }  // namespace lanechange::testing
