@@ -6,7 +6,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <limits>
 #include <utility>
+
+#include "lanechange/checks.hpp"
+#include "lanechange/ego.hpp"
 
 namespace lanechange::planner {
 
@@ -20,6 +25,18 @@ using expert::PlanStatus;
 // the check that called it (mlp-miqp), and the node QP or round that is
 // running when its time limit passes, which it finishes before it returns.
 constexpr double kStepReserveMs = 3.0;
+
+// What `limits` leave after the plan `spent`.
+expert::PlanLimits limits_left(const expert::PlanLimits& limits, const ExpertResult& spent) {
+  long iterations = 0;
+  for (const expert::RoundReport& round : spent.rounds) iterations += round.qp_iterations;
+  expert::PlanLimits left = limits;
+  left.time_limit_s = std::max(0.0, limits.time_limit_s - spent.total_ms / 1000.0);
+  if (limits.qp_iterations != std::numeric_limits<long>::max()) {
+    left.qp_iterations = std::max(0L, limits.qp_iterations - iterations);
+  }
+  return left;
+}
 
 }  // namespace
 
@@ -64,19 +81,21 @@ Config closed_loop_expert(Config config) {
   return config;
 }
 
-Scenario scene_now(const Observation& o, const Config& config) {
+Scenario scene_now(const Observation& o, const Config& config, double deadline_set_at) {
   Scenario scene;
-  scene_now(o, config, scene);
+  scene_now(o, config, scene, deadline_set_at);
   return scene;
 }
 
-void scene_now(const Observation& o, const Config& config, Scenario& scene) {
+void scene_now(const Observation& o, const Config& config, Scenario& scene,
+               double deadline_set_at) {
   scene = *o.scene;
   scene.ego = o.ego;
   for (CarIndex c = 0; c < scene.car_count(); ++c) scene.cars[c].state = o.car(c);
   const double dt = o.scene->horizon / o.scene->steps;
   if (config.closed_loop.horizon_mode == HorizonMode::Shrinking) {
-    const double left = std::max(config.closed_loop.min_horizon, o.scene->horizon - o.t);
+    const double left =
+        std::max(config.closed_loop.min_horizon, o.scene->horizon - (o.t - deadline_set_at));
     scene.steps = std::max(2, static_cast<int>(std::lround(left / dt)));
     scene.horizon = scene.steps * dt;
   }
@@ -114,7 +133,7 @@ Decision MiqpSession::act(const Observation& o) {
 }
 
 std::string MiqpSession::replan(const Observation& o) {
-  scene_now(o, config_, scene_);
+  scene_now(o, config_, scene_, deadline_set_at_);
   const Scenario& scene = scene_;
   const double dt = scene.horizon / scene.steps;
   expert::PlanHints hints;
@@ -139,19 +158,65 @@ std::string MiqpSession::replan(const Observation& o) {
       std::max(0.0, step_wall_limit_ms(loop, loop.step_budget_ms) - kStepReserveMs) / 1000.0};
   if (loop.deadline == Deadline::Work) limits.qp_iterations = loop.step_qp_iterations;
   plan_function_(scene, limits, hints, result_);
+  double plan_ms = result_.total_ms;
+  const bool no_plan = result_.status != PlanStatus::Converged && !result_.cut_with_incumbent() &&
+                       result_.status != PlanStatus::TimeLimit &&
+                       result_.status != PlanStatus::WorkLimit;
+  const bool shrunk = scene.horizon < o.scene->horizon - 0.5 * dt;
+  if (no_plan && (shrunk || hints.path != nullptr)) {
+    // No lane change meets the deadline the first plan set: the gap it
+    // aimed for has gone. Give the next gap the whole horizon from now, as
+    // a driver who missed a gap waits for the next; and plan it from a warm
+    // start per gap, not from the last plan, which the ego has left.
+    if (shrunk) deadline_set_at_ = o.t;
+    scene_now(o, config_, scene_, deadline_set_at_);
+    plan_cold(scene_, limits_left(limits, result_), hints);
+    plan_ms += result_.total_ms;
+  }
   const ExpertResult& result = result_;
-  last_plan_ms_ = result.total_ms;
+  last_plan_ms_ = plan_ms;
   last_status_ = result.status;
   // A plan cut by its budget still drives with the best it found: the
   // fallback is for steps with no safe plan at all.
   if (result.status != PlanStatus::Converged && !result.cut_with_incumbent()) {
     return std::string(expert::to_string(result.status)) + ": " + result.reason;
   }
+  std::string collision = collision_of(result, scene_);
+  if (!collision.empty()) return collision;
   plan_ = result.path;
   modes_ = result.modes;
   plan_gap_ = expert::frame_of(result.gap);
   plan_step_ = o.step;
   return "";
+}
+
+void MiqpSession::plan_cold(const Scenario& scene, const expert::PlanLimits& limits,
+                            expert::PlanHints hints) {
+  hints.path = nullptr;
+  hints.modes = nullptr;
+  hints.path_is_plan = false;
+  hints.last_gap = nullptr;
+  plan_function_(scene, limits, hints, result_);
+}
+
+std::string MiqpSession::collision_of(const ExpertResult& plan, const Scenario& scene) {
+  const double dt = scene.horizon / scene.steps;
+  poses_.clear();
+  EgoState pose = scene.ego;
+  for (int k = 0; k <= scene.steps; ++k) {
+    const expert::Control& u = plan.path.controls[std::min(k, scene.steps - 1)];
+    pose.a = u[expert::kA];
+    poses_.push_back(pose);
+    if (k < scene.steps) pose = step_trapezoidal(pose, {u[expert::kA], u[expert::kOmega]}, dt);
+  }
+  // The lane rows bound the body's lateral extent, not its corners at a
+  // heading: at a steep crossing at low speed a corner can reach a car.
+  const auto contact = first_collision(poses_, plan.prediction, scene);
+  if (!contact) return "";
+  char why[160];
+  std::snprintf(why, sizeof why, "the plan's path meets the %s at t = %.1f s",
+                scene.cars[contact->car].id.c_str(), contact->time);
+  return why;
 }
 
 Decision MiqpSession::fallback(const Observation& o, const std::string& why) {

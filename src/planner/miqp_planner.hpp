@@ -14,10 +14,13 @@
 namespace lanechange::planner {
 
 /// The scene as it is now: the initial scene's fields with the current
-/// states of every car, and the horizon the config's mode asks for.
-[[nodiscard]] Scenario scene_now(const Observation& observation, const Config& config);
+/// states of every car, and the horizon the config's mode asks for. A
+/// shrinking horizon ends the initial horizon after `deadline_set_at` (s).
+[[nodiscard]] Scenario scene_now(const Observation& observation, const Config& config,
+                                 double deadline_set_at = 0.0);
 /// The same into `out`, whose lists keep their memory.
-void scene_now(const Observation& observation, const Config& config, Scenario& out);
+void scene_now(const Observation& observation, const Config& config, Scenario& out,
+               double deadline_set_at = 0.0);
 
 /// The path shifted forward by `by` nodes and cut or padded (the last node
 /// coasting along its heading) to `steps` steps: a plan made `by` steps ago,
@@ -60,6 +63,11 @@ class MiqpSession final : public PlannerSession {
  private:
   /// Re-plans from the observation; returns why it failed ("" on success).
   std::string replan(const Observation& observation);
+  /// Plans `scene` from a warm start per gap, without the last plan.
+  void plan_cold(const Scenario& scene, const expert::PlanLimits& limits, expert::PlanHints hints);
+  /// Where the plan's own path, the ego an oriented box, first meets a car
+  /// as the plan predicts it: "" where it meets none.
+  std::string collision_of(const expert::ExpertResult& plan, const Scenario& scene);
   [[nodiscard]] Decision fallback(const Observation& observation, const std::string& why);
 
   PlanFunction plan_function_;
@@ -72,7 +80,11 @@ class MiqpSession final : public PlannerSession {
   int workspace_step_ = 0;     ///< the step of the last re-plan that used workspace_
   expert::PlanMemory memory_;  ///< where every re-plan builds and predicts (PlanHints::memory)
   Scenario scene_;             ///< the scene of the last re-plan
-  expert::Iterate guess_;      ///< the last plan shifted to now
+  /// s: the shrinking horizon ends the initial horizon after this, moved on
+  /// when no lane change meets it.
+  double deadline_set_at_ = 0.0;
+  std::vector<EgoState> poses_;  ///< the plan's path, for collision_of
+  expert::Iterate guess_;        ///< the last plan shifted to now
   std::vector<int> guess_modes_;
   expert::ExpertResult result_;  ///< of the last re-plan
   double last_plan_ms_ = 0.0;

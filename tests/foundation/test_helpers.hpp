@@ -204,6 +204,15 @@ inline Config fixed_gap_config(Config config = {}) {
   return config;
 }
 
+/// For no_gap_scenario(): Eq. 1's gap alone, between cars that keep their
+/// speed whatever the ego does, so that it never opens. A follower that
+/// reacts makes room for an ego that waits at the line long enough.
+inline Config no_gap_config(Config config = {}) {
+  config = fixed_gap_config(std::move(config));
+  config.traffic.followers_react = false;
+  return config;
+}
+
 /// The paper's whole set-up: Eq. 1's gap alone and distances, in the paper's traffic
 /// (cars that ignore everything, IDM without a braking limit).
 inline Config paper_config(Config config = {}) { return paper_formulation(std::move(config)); }

@@ -13,11 +13,13 @@ namespace lanechange::testing {
 
 // The checks every rollout must pass: the ego follows its controls through
 // the exact model, the cars follow their behavior (reacting to the real ego),
-// the collision flag is what the boxes say, and the limits hold.
-inline void expect_consistent(const sim::Rollout& r, const Scenario& s) {
+// the collision flag is what the boxes say, and the limits hold. `config`
+// is the rollout's, for its traffic settings.
+inline void expect_consistent(const sim::Rollout& r, const Scenario& s,
+                              const Config& config = Config{}) {
   const Trajectory& t = r.trajectory;
   ASSERT_EQ(t.nodes(), static_cast<int>(r.steps.size()) + 1);
-  TrafficModel traffic(s, Config{});
+  TrafficModel traffic(s, config);
   EgoState ego = s.ego;
   for (int k = 0; k + 1 < t.nodes(); ++k) {
     const EgoControl u = t.controls[k];

@@ -89,12 +89,12 @@ TEST(ClosedLoop, TheKeeperTakesOverOnlyWhereItHoldsTheLane) {
 }
 
 TEST(ClosedLoop, NoGapIsAbortedWithoutCollision) {
-  const Config config = testing::fixed_gap_config(testing::untimed_config());
+  const Config config = testing::no_gap_config(testing::untimed_config());
   const Scenario s = no_gap();
   for (const char* name : {"miqp", "keep-lane"}) {
     const auto p = planner::make_planner(name, config);
     const sim::Rollout r = sim::simulate(s, *p, config);
-    testing::expect_consistent(r, s);
+    testing::expect_consistent(r, s, config);
     EXPECT_EQ(r.outcome, Outcome::Aborted) << name << ": " << r.reason;
     EXPECT_FALSE(r.trajectory.collision) << name;
     EXPECT_GT(r.metrics.fallbacks, 0) << name;
@@ -137,6 +137,34 @@ TEST(ClosedLoop, TheExpertCutsInNoCloserThanTheCarBehindCanTakeCalmly) {
   ASSERT_TRUE(config.expert.cut_in_decel.has_value());
   EXPECT_LE(calm.metrics.forced_decel, config.closed_loop.unsafe_decel);
   EXPECT_FALSE(calm.trajectory.collision);
+}
+
+// A dense scene whose first plan is cut by the step's budget of work; the gap
+// it aimed for closes, and no lane change meets that plan's deadline. The
+// expert gives the next gap the whole horizon from then and changes lanes
+// (with the deadline kept, the lane keeper drove to the end).
+TEST(ClosedLoop, WhereTheFirstDeadlinesGapClosesTheExpertTakesAnotherWithANewDeadline) {
+  Config config;  // the deadline of work: the same steps on any load
+  config.sampler.target_lane_cars = {4.0, 10.0};
+  const Scenario s = ScenarioSampler(config, 2026).sample(272);
+  const sim::Rollout r = sim::simulate(s, *planner::make_planner("miqp", config), config);
+  testing::expect_consistent(r, s);
+  EXPECT_EQ(r.outcome, Outcome::WellPosed) << r.reason;
+  EXPECT_FALSE(r.trajectory.collision);
+}
+
+// The re-plan after a missed deadline stops the ego to let the follower pass
+// and turns in steeply behind it at walking pace; the lane rows bound the
+// body's lateral extent but not its corners at that heading. The session
+// checks each plan's own path with oriented boxes and follows none that
+// meets a car.
+TEST(ClosedLoop, TheExpertFollowsNoPlanWhosePathMeetsACar) {
+  const Config config;
+  const Scenario s = ScenarioSampler(config, 2026).sample(128);
+  ASSERT_EQ(s.behavior, Behavior::ConstantAccel);
+  const sim::Rollout r = sim::simulate(s, *planner::make_planner("miqp", config), config);
+  testing::expect_consistent(r, s);
+  EXPECT_FALSE(r.trajectory.collision) << r.reason;
 }
 
 TEST(ClosedLoop, SampledRolloutsAreConsistent) {

@@ -157,7 +157,7 @@ TEST(MlpMiqp, AGapNetworkIsTakenOverBeforeItForcesHardBraking) {
 
 TEST(MlpMiqp, ANetworkSteeringIntoACarIsTakenOverAndNothingIsHit) {
   const Scenario s = testing::no_gap_scenario();
-  const Config paper = testing::fixed_gap_config(testing::untimed_config());
+  const Config paper = testing::no_gap_config(testing::untimed_config());
   const MlpMiqpPlanner p = forced(swerve_left, kWorthTrying, paper);
   const sim::Rollout r = sim::simulate(s, p, paper);
   EXPECT_GE(r.metrics.takeovers, 1);
@@ -212,7 +212,7 @@ TEST(MlpMiqp, AWrongRefusalIsCaughtByTheExpertsCheck) {
 
   // Where the expert finds no plan either, the fallback keeps the lane and
   // the expert checks again every period, no more often.
-  Config sparse = testing::fixed_gap_config(config);
+  Config sparse = testing::no_gap_config(config);
   sparse.closed_loop.refusal_check_period = 3;
   const MlpMiqpPlanner checks_every_third = refusing_counter(calls, sparse);
   const sim::Rollout blocked =

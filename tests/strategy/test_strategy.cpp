@@ -867,7 +867,7 @@ TEST(Strategy, ClosedLoopChangesLanesIntoAWideOpenGap) {
 }
 
 TEST(Strategy, ClosedLoopStaysInLaneWithoutAGap) {
-  const Config config = testing::fixed_gap_config(testing::untimed_config());
+  const Config config = testing::no_gap_config(testing::untimed_config());
   const Scenario s = testing::no_gap_scenario();
   const auto p = std::make_shared<planner::StrategyQpPlanner>(
       config, model_of({testing::open_road_scenario()}, {"0000011111222"}));
