@@ -163,11 +163,14 @@ std::string MiqpSession::replan(const Observation& o) {
                        result_.status != PlanStatus::TimeLimit &&
                        result_.status != PlanStatus::WorkLimit;
   const bool shrunk = scene.horizon < o.scene->horizon - 0.5 * dt;
-  if (no_plan && (shrunk || hints.path != nullptr)) {
-    // No lane change meets the deadline the first plan set: the gap it
-    // aimed for has gone. Give the next gap the whole horizon from now, as
-    // a driver who missed a gap waits for the next; and plan it from a warm
-    // start per gap, not from the last plan, which the ego has left.
+  const bool fresh_plan = plan_ && o.step - plan_step_ <= config_.closed_loop.stale_plan_steps;
+  if (no_plan && !fresh_plan && (shrunk || hints.path != nullptr)) {
+    // No lane change has met the deadline the first plan set for longer
+    // than a plan stays fresh: the gap it aimed for has gone. Give the next
+    // gap the whole horizon from now, as a driver who missed a gap waits for
+    // the next; and plan it from a warm start per gap, not from the last
+    // plan, which the ego has left. (A step that fails while the last plan
+    // is fresh follows that plan, and the next step tries again.)
     if (shrunk) deadline_set_at_ = o.t;
     scene_now(o, config_, scene_, deadline_set_at_);
     plan_cold(scene_, limits_left(limits, result_), hints);
