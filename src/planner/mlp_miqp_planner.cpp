@@ -388,6 +388,33 @@ std::string forced_braking(const Observation& o, const TrafficModel& traffic,
   return "";
 }
 
+bool at_node(double t, double when, double dt) { return t >= when - 1e-9 && t < when + dt - 1e-9; }
+
+// The expert's plans cross the lane line before t_f and settle on the target
+// lane's centre by the end of the run (t_f plus closed_loop.settle_time), as
+// the judge asks. A network whose look-ahead misses either has stalled below
+// or across the line (out of its training distribution, e.g. faster
+// traffic) and would end the run a failure, while the expert still has the
+// time to finish the change.
+std::string late(const Observation& o, const Scenario& scene, const Config& config) {
+  const double dt = scene.horizon / scene.steps;
+  const double w = scene.lane_width;
+  char what[120];
+  if (at_node(o.t, scene.horizon, dt) && o.ego.y < w / 2.0) {
+    std::snprintf(what, sizeof what,
+                  "the network would not have crossed the lane line at t_f (y %.2f m)", o.ego.y);
+    return what;
+  }
+  const double miss = std::abs(o.ego.y - w);
+  if (at_node(o.t, scene.horizon + config.closed_loop.settle_time, dt) &&
+      miss > config.labels.reach) {
+    std::snprintf(what, sizeof what,
+                  "the network would end the run %.2f m off the target lane's centre", miss);
+    return what;
+  }
+  return "";
+}
+
 }  // namespace
 
 // The policy rolled forward against the cars as their behavior predicts
@@ -560,7 +587,7 @@ std::string MlpMiqpSession::check_node(int ahead) {
                   ahead);
     return what;
   }
-  return "";
+  return late(o, scene, planner_.config());
 }
 
 }  // namespace lanechange::planner

@@ -140,7 +140,9 @@ class Episode {
   void read_cars() { sumo_.cars_near(frame_, ego_.x, settings_.range + kRangeHysteresis, near_); }
 
   // A new scene, and a new planner session, where the cars around the ego
-  // changed (entered or left the range, or changed lanes). Returns whether it did.
+  // changed (entered or left the range, or changed lanes). Returns whether it
+  // did. The clock runs on from the request: the manoeuvre's deadline is the
+  // request's, whatever cars come and go.
   bool update_scene(const planner::ClosedLoopPlanner& planner,
                     std::unique_ptr<planner::PlannerSession>& session, int k) {
     std::erase_if(near_, [&](const SumoCar& c) {
@@ -152,7 +154,6 @@ class Episode {
     if (!same) {
       scene_ = scene_of(config_, ego_, near_, settings_.prediction, desired_speed_, frame_.side());
       session = planner.start(scene_);
-      scene_start_ = k;
       if (k == 0) {
         for (const Role role : kRoles) {
           if (scene_.has(role))
@@ -160,7 +161,7 @@ class Episode {
         }
       }
     }
-    fill_observation(k - scene_start_);
+    fill_observation(k);
     return !same;
   }
 
@@ -234,7 +235,6 @@ class Episode {
   sim::detail::SettleCheck settle_;
   EgoState ego_;
   Scenario scene_;
-  int scene_start_ = 0;
   std::array<std::string, 3> first_roles_;
   std::vector<SumoCar> near_;
   planner::Observation observation_;

@@ -328,6 +328,38 @@ TEST(MlpMiqp, ANetworkSwingingBackTowardsTheEgoLaneIsTakenOver) {
   EXPECT_FALSE(r.trajectory.collision);
 }
 
+// A network that stops short of the line, or across it, and drives on
+// straight would end the run outside the target lane: the expert takes over
+// once the look-ahead shows it (at t_f, or at the end of the run), while it
+// still has the time to finish the change.
+TEST(MlpMiqp, ANetworkThatStallsShortOfTheTargetLaneIsTakenOverInTime) {
+  const Config config = testing::untimed_config();
+  const Scenario s = testing::open_road_scenario();
+  struct Case {
+    double stall_y;
+    double checked_at;  // the look-ahead node that finds it
+    const char* reason;
+  };
+  const double run_end = s.horizon + config.closed_loop.settle_time;
+  for (const Case& c : {Case{1.0, s.horizon, "not have crossed the lane line at t_f"},
+                        Case{2.5, run_end, "off the target lane's centre"}}) {
+    const MlpMiqpPlanner p = forced([&c](const Observation& o) {
+      const double heading = o.ego.y < c.stall_y ? 0.1 : 0.0;
+      return EgoControl{0.0, 3.0 * (heading - o.ego.theta)};
+    });
+    const sim::Rollout r = sim::simulate(s, p, config);
+    ASSERT_EQ(r.metrics.takeovers, 1) << c.reason;
+    const auto took_over = std::find_if(r.steps.begin(), r.steps.end(), [](const auto& step) {
+      return step.status == planner::ActStatus::TookOver;
+    });
+    ASSERT_NE(took_over, r.steps.end());
+    EXPECT_NE(took_over->reason.find(c.reason), std::string::npos) << took_over->reason;
+    const double taken_at = static_cast<double>(took_over - r.steps.begin()) * s.horizon / s.steps;
+    EXPECT_GE(taken_at, c.checked_at - config.closed_loop.lookahead - 1e-9) << c.reason;
+    EXPECT_EQ(r.outcome, Outcome::WellPosed) << c.reason << ": " << r.reason;
+  }
+}
+
 // The look-ahead kept from step to step (closed_loop.lookahead_tolerance)
 // asks the network about twice per step instead of once per look-ahead
 // node, and reaches the verdicts of a look-ahead rolled out every step.

@@ -128,6 +128,62 @@ TEST(SumoHighway, SumosEgoIsOursAfterEveryStep) {
   EXPECT_EQ(r.rollout.trajectory.others.car_count(), r.scene.car_count());
 }
 
+// The expert, recording the time of every observation it is handed and
+// how many sessions the co-simulation started.
+class TimedExpert final : public planner::ClosedLoopPlanner {
+ public:
+  struct Seen {
+    int step;
+    double t;
+  };
+  explicit TimedExpert(const Config& config) : inner_(baselines::make_planner("miqp", config)) {}
+  [[nodiscard]] std::string_view name() const override { return "miqp"; }
+  [[nodiscard]] std::unique_ptr<planner::PlannerSession> start(
+      const Scenario& scene) const override {
+    ++sessions;
+    return std::make_unique<Session>(inner_->start(scene), seen);
+  }
+  mutable int sessions = 0;
+  mutable std::vector<Seen> seen;
+
+ private:
+  class Session final : public planner::PlannerSession {
+   public:
+    Session(std::unique_ptr<planner::PlannerSession> inner, std::vector<Seen>& seen)
+        : inner_(std::move(inner)), seen_(seen) {}
+    [[nodiscard]] planner::Decision act(const planner::Observation& o) override {
+      seen_.push_back({o.step, o.t});
+      return inner_->act(o);
+    }
+
+   private:
+    std::unique_ptr<planner::PlannerSession> inner_;
+    std::vector<Seen>& seen_;
+  };
+  std::shared_ptr<const planner::ClosedLoopPlanner> inner_;
+};
+
+// Cars come into range and leave it, and each change starts a new session
+// on the new scene; the clock runs on from the request through all of them,
+// so the manoeuvre's deadline (t_f) stays where the request set it and a
+// network that reads the time is not told that a change half done starts now.
+TEST(SumoHighway, TheClockRunsOnFromTheRequestAcrossNewScenes) {
+  const testing::TempDir dir;
+  const Config config = as_sumo_drives(testing::untimed_config());
+  const TimedExpert planner(config);
+  CoSimSettings settings;
+  settings.work_dir = dir.path().string() + "/sumo";
+  const CoSimResult r = run_highway(planner, config, busy_highway(), settings);
+  ASSERT_GT(r.scenes, 1);
+  EXPECT_EQ(planner.sessions, r.scenes);
+  ASSERT_FALSE(planner.seen.empty());
+  const double dt = r.rollout.trajectory.dt;
+  for (std::size_t k = 0; k < planner.seen.size(); ++k) {
+    EXPECT_EQ(planner.seen[k].step, static_cast<int>(k));
+    EXPECT_NEAR(planner.seen[k].t, static_cast<double>(k) * dt, 1e-9) << "step " << k;
+  }
+}
+
 TEST(SumoHighway, TheRolloutFileReadsBackWithItsAbsentCars) {
   const testing::TempDir dir;
   const CoSimResult r = run_miqp(busy_highway(), dir);
