@@ -641,6 +641,18 @@ LinearizedRound ExpertPlanner::first_round(const Scenario& scenario, const PlanH
   return out;
 }
 
+void poses_along(const Iterate& path, const EgoState& start, int steps, double dt,
+                 std::vector<EgoState>& out) {
+  out.clear();
+  EgoState pose = start;
+  for (int k = 0; k <= steps; ++k) {
+    const Control& u = path.controls[std::min(k, steps - 1)];
+    pose.a = u[kA];
+    out.push_back(pose);
+    if (k < steps) pose = step_trapezoidal(pose, {u[kA], u[kOmega]}, dt);
+  }
+}
+
 Trajectory ExpertPlanner::to_trajectory(const ExpertResult& result,
                                         const Scenario& scenario) const {
   if (result.path.states.empty()) {
@@ -655,17 +667,15 @@ Trajectory ExpertPlanner::to_trajectory(const ExpertResult& result,
   t.dt = scenario.horizon / steps;
   t.lane_width = scenario.lane_width;
   t.target_side = scenario.target_side;
-  EgoState state = scenario.ego;
+  poses_along(result.path, scenario.ego, steps, t.dt, t.ego);
   double defect = 0.0;
   for (int k = 0; k <= steps; ++k) {
     t.t.push_back(k * t.dt);
     const Control& u = result.path.controls[std::min(k, steps - 1)];
-    state.a = u[kA];
-    t.ego.push_back(state);
     t.controls.push_back({u[kA], u[kOmega]});
     const State& z = result.path.states[k];
-    defect = std::max({defect, std::abs(state.x - z[kX]), std::abs(state.y - z[kY])});
-    if (k < steps) state = step_trapezoidal(state, {u[kA], u[kOmega]}, t.dt);
+    const EgoState& pose = t.ego[static_cast<std::size_t>(k)];
+    defect = std::max({defect, std::abs(pose.x - z[kX]), std::abs(pose.y - z[kY])});
   }
   t.others.dt = t.dt;
   t.others.cars.resize(result.prediction.car_count());

@@ -159,7 +159,8 @@ std::string MiqpSession::replan(const Observation& o) {
   if (loop.deadline == Deadline::Work) limits.qp_iterations = loop.step_qp_iterations;
   plan_function_(scene, limits, hints, result_);
   double plan_ms = result_.total_ms;
-  const bool no_plan = result_.status != PlanStatus::Converged && !result_.cut_with_incumbent() &&
+  // A plan cut by its budget, with or without a path, leaves none for a retry.
+  const bool no_plan = result_.status != PlanStatus::Converged &&
                        result_.status != PlanStatus::TimeLimit &&
                        result_.status != PlanStatus::WorkLimit;
   const bool shrunk = scene.horizon < o.scene->horizon - 0.5 * dt;
@@ -203,15 +204,7 @@ void MiqpSession::plan_cold(const Scenario& scene, const expert::PlanLimits& lim
 }
 
 std::string MiqpSession::collision_of(const ExpertResult& plan, const Scenario& scene) {
-  const double dt = scene.horizon / scene.steps;
-  poses_.clear();
-  EgoState pose = scene.ego;
-  for (int k = 0; k <= scene.steps; ++k) {
-    const expert::Control& u = plan.path.controls[std::min(k, scene.steps - 1)];
-    pose.a = u[expert::kA];
-    poses_.push_back(pose);
-    if (k < scene.steps) pose = step_trapezoidal(pose, {u[expert::kA], u[expert::kOmega]}, dt);
-  }
+  expert::poses_along(plan.path, scene.ego, scene.steps, scene.horizon / scene.steps, poses_);
   // The lane rows bound the body's lateral extent, not its corners at a
   // heading: at a steep crossing at low speed a corner can reach a car.
   const auto contact = first_collision(poses_, plan.prediction, scene);

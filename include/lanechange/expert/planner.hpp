@@ -228,4 +228,11 @@ class ExpertPlanner {
   std::shared_ptr<const LaneChangeSolver> solver_;
 };
 
+/// The ego's states at the nodes of a path's controls, run from `start`
+/// through the (nonlinear) discrete model over `steps` steps of `dt`, each
+/// node's a the control applied from it: what a follower of the plan drives,
+/// whatever the linearization said. `out` keeps its memory.
+void poses_along(const Iterate& path, const EgoState& start, int steps, double dt,
+                 std::vector<EgoState>& out);
+
 }  // namespace lanechange::expert
