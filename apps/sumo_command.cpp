@@ -25,10 +25,11 @@ struct SumoArgs {
 };
 
 void run_episode(SumoArgs& a, const Config& given) {
-  const Config config = sumo::as_sumo_drives(given);
   if (a.highway == !a.commonroad.empty()) {
     throw InputError("--highway", "name the traffic: --highway or --commonroad DIR");
   }
+  const Config config = sumo::as_sumo_drives(
+      given, a.highway ? sumo::SumoCarModel{} : sumo::commonroad_car_model(a.commonroad));
   a.loop.prediction = behavior_from_string(a.prediction, "--prediction");
   if (a.loop.work_dir.empty()) a.loop.work_dir = a.out_path + ".sumo";
   const auto planner = baselines::make_planner(a.planner, config, a.model_dir);

@@ -262,9 +262,11 @@ std::vector<std::string> sumo_arguments(double dt, int seed, const std::string& 
 
 }  // namespace
 
-Config as_sumo_drives(Config config) {
+Config as_sumo_drives(Config config, const SumoCarModel& cars) {
   config.traffic.sees_ego = SeesEgo::Overlapping;
-  config.traffic.min_gap = 2.5;  // m: SUMO's passenger car, and the built-in highway's
+  config.traffic.follow_decel = cars.decel;
+  config.traffic.min_gap = cars.min_gap;
+  config.traffic.reaction_time = cars.tau;
   return config;
 }
 

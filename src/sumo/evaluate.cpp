@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <sstream>
 #include <thread>
 
@@ -120,21 +121,53 @@ json parameters_of(const EvaluateOptions& o, const std::vector<EpisodeSpec>& epi
 }
 
 // Runs the shards `shards` (one process), writing each shard file whole.
+// The planners of a CommonRoad folder whose cars SUMO drives by a vehicle
+// type of its own, made for it once (the built-in highway's are SUMO's
+// defaults, the planners evaluate() made).
+class FolderPlanners {
+ public:
+  FolderPlanners(const EvaluateOptions& o, const Planners& defaults) : o_(o), defaults_(defaults) {}
+
+  // The config and planners for `folder`.
+  std::pair<const Config*, const Planners*> of(const std::string& folder) {
+    const SumoCarModel cars = commonroad_car_model(folder);
+    if (cars == SumoCarModel{}) return {&o_.config, &defaults_};
+    if (!model_ || !(*model_ == cars)) {
+      model_ = cars;
+      config_ = as_sumo_drives(o_.config, cars);
+      planners_.clear();
+      for (const auto& name : o_.planners)
+        planners_.push_back(o_.make_planner(name, config_, o_.model_dir));
+    }
+    return {&config_, &planners_};
+  }
+
+ private:
+  const EvaluateOptions& o_;
+  const Planners& defaults_;
+  std::optional<SumoCarModel> model_;
+  Config config_;
+  Planners planners_;
+};
+
 void run_shards(const EvaluateOptions& o, const Planners& planners,
                 const std::vector<EpisodeSpec>& episodes, const std::vector<long long>& shards,
                 const std::string& work_dir) {
   const auto total = static_cast<long long>(episodes.size());
   CoSimSettings loop = o.loop;
   loop.work_dir = work_dir;
+  FolderPlanners folder_planners(o, planners);
   for (const long long shard : shards) {
     std::string rows = sim::detail::csv_header(sim::rollout_columns());
     const long long first = shard * o.shard_size;
     for (long long index = first; index < std::min(total, first + o.shard_size); ++index) {
       const EpisodeSpec& e = episodes[static_cast<std::size_t>(index)];
-      for (std::size_t p = 0; p < planners.size(); ++p) {
-        const CoSimResult r = e.folder.empty()
-                                  ? run_highway(*planners[p], o.config, e.highway, loop)
-                                  : run_commonroad(*planners[p], o.config, e.folder, loop);
+      const auto [config, episode_planners] =
+          e.folder.empty() ? std::pair{&o.config, &planners} : folder_planners.of(e.folder);
+      for (std::size_t p = 0; p < episode_planners->size(); ++p) {
+        const planner::ClosedLoopPlanner& planner = *(*episode_planners)[p];
+        const CoSimResult r = e.folder.empty() ? run_highway(planner, *config, e.highway, loop)
+                                               : run_commonroad(planner, *config, e.folder, loop);
         rows += sim::detail::rollout_row(index, e.group, o.planners[p], r.rollout);
       }
     }

@@ -1,10 +1,13 @@
 #include "sumo/interactive.hpp"
 
+#include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <pugixml.hpp>
 #include <sstream>
 
 #include "lanechange/error.hpp"
+#include "lanechange/sumo/cosim.hpp"
 
 namespace lanechange::sumo::detail {
 
@@ -57,6 +60,20 @@ std::string cleaned_routes(const std::string& path, const std::string& work_dir)
   return out.string();
 }
 
+// A vType attribute: SUMO's default where absent.
+double positive_attribute(const pugi::xml_node& type, const char* name, double fallback,
+                          const std::string& file) {
+  const pugi::xml_attribute a = type.attribute(name);
+  if (!a) return fallback;
+  char* end = nullptr;
+  const double value = std::strtod(a.value(), &end);
+  if (end == a.value() || *end != '\0' || !(value > 0.0) || !std::isfinite(value)) {
+    throw InputError(
+        file, std::string("vType ") + name + " \"" + a.value() + "\" is not a positive number");
+  }
+  return value;
+}
+
 }  // namespace
 
 InteractiveScenario read_interactive(const std::string& folder, const std::string& work_dir) {
@@ -82,3 +99,30 @@ InteractiveScenario read_interactive(const std::string& folder, const std::strin
 }
 
 }  // namespace lanechange::sumo::detail
+
+namespace lanechange::sumo {
+
+SumoCarModel commonroad_car_model(const std::string& folder) {
+  const std::filesystem::path dir(folder);
+  std::string name = dir.filename().string();
+  if (name.empty()) name = dir.parent_path().filename().string();
+  SumoCarModel model;
+  for (const char* suffix : {".add.xml", ".vehicles.rou.xml"}) {
+    const std::filesystem::path file = dir / (name + suffix);
+    if (!std::filesystem::is_regular_file(file)) continue;
+    pugi::xml_document doc;
+    const pugi::xml_parse_result parsed = doc.load_file(file.c_str());
+    if (!parsed) {
+      throw InputError(file.string(), std::string("is not XML: ") + parsed.description());
+    }
+    const pugi::xml_node type = doc.select_node("//vType").node();
+    if (!type) continue;
+    model.decel = detail::positive_attribute(type, "decel", model.decel, file.string());
+    model.min_gap = detail::positive_attribute(type, "minGap", model.min_gap, file.string());
+    model.tau = detail::positive_attribute(type, "tau", model.tau, file.string());
+    break;
+  }
+  return model;
+}
+
+}  // namespace lanechange::sumo

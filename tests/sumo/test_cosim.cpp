@@ -254,6 +254,54 @@ TEST(SumoCommonRoad, AnInteractiveScenarioRunsToAnOutcomeAndIsOnlyRead) {
   EXPECT_EQ(listing(folder), before);
 }
 
+// A folder's vehicle type is how SUMO drives its cars, and so how the
+// planners predict them; what the type leaves out is SUMO's default.
+TEST(SumoCommonRoad, TheCarModelIsTheFoldersVehicleType) {
+  const testing::TempDir dir;
+  const std::string folder = dir.path().string() + "/ONE_1";
+  std::filesystem::create_directories(folder);
+  EXPECT_EQ(commonroad_car_model(folder), SumoCarModel{});
+  testing::write_text(folder + "/ONE_1.vehicles.rou.xml",
+                      R"(<routes><vType id="car" decel="6" minGap="1.5" tau="0.8"/></routes>)");
+  EXPECT_EQ(commonroad_car_model(folder), (SumoCarModel{6.0, 1.5, 0.8}));
+  // NAME.add.xml comes first.
+  testing::write_text(folder + "/ONE_1.add.xml",
+                      R"(<additional><vTypeDistribution id="d"><vType id="p" decel="7.5" )"
+                      R"(minGap="1.0"/></vTypeDistribution></additional>)");
+  EXPECT_EQ(commonroad_car_model(folder), (SumoCarModel{7.5, 1.0, SumoCarModel{}.tau}));
+  const Config config = as_sumo_drives(Config{}, commonroad_car_model(folder));
+  EXPECT_EQ(config.traffic.follow_decel, 7.5);
+  EXPECT_EQ(config.traffic.min_gap, 1.0);
+  EXPECT_EQ(config.traffic.sees_ego, SeesEgo::Overlapping);
+  testing::write_text(folder + "/ONE_1.add.xml",
+                      R"(<additional><vType id="p" decel="-2"/></additional>)");
+  try {
+    (void)commonroad_car_model(folder);
+    ADD_FAILURE() << "a negative decel was read";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("ONE_1.add.xml"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("decel"), std::string::npos) << e.what();
+  }
+}
+
+// USA_US101-19_1's cars brake at up to 7.5 m/s^2 (its vType), which makes
+// Krauss's response to a cut-in sharper than SUMO's default car's: predicted
+// by the default, the expert cut in where the car behind had to brake at
+// 4.39 m/s^2; predicted by the folder's type, it changes lanes calmly.
+TEST(SumoCommonRoad, TheExpertPredictsTheFoldersCarsAndCutsInCalmly) {
+  const std::string folder = kInteractive + "/USA_US101-19_1_I-1-1";
+  if (!std::filesystem::is_directory(folder)) GTEST_SKIP() << folder << " is not here";
+  const testing::TempDir dir;
+  const Config config = as_sumo_drives(testing::untimed_config(), commonroad_car_model(folder));
+  CoSimSettings settings;
+  settings.work_dir = dir.path().string() + "/sumo";
+  const CoSimResult r =
+      run_commonroad(*baselines::make_planner("miqp", config), config, folder, settings);
+  EXPECT_EQ(r.rollout.outcome, sim::Outcome::WellPosed) << r.rollout.reason;
+  EXPECT_LT(r.rollout.forced_decel, config.closed_loop.unsafe_decel);
+  EXPECT_FALSE(r.rollout.metrics.unsafe_cut_in);
+}
+
 TEST(SumoCommonRoad, AFolderWithoutItsScenarioFileExitsTwoNamingIt) {
   const testing::TempDir dir;
   const std::string folder = dir.path().string() + "/ONE_1";

@@ -69,11 +69,27 @@ struct CoSimResult {
   double follower_braking = 0.0;
 };
 
+/// Krauss's parameters of SUMO's cars, as a vehicle type sets them: SUMO's
+/// passenger car unless a scenario gives its own.
+struct SumoCarModel {
+  double decel = 4.5;    ///< m/s^2: the braking its safe speed plans with (decel)
+  double min_gap = 2.5;  ///< m: bumper to bumper on top of the safe-speed gap (minGap)
+  double tau = 1.0;      ///< s: its reaction time (tau)
+  bool operator==(const SumoCarModel&) const = default;
+};
+
+/// The car model of a CommonRoad interactive folder: the first vType of
+/// NAME.add.xml (else of NAME.vehicles.rou.xml), SUMO's defaults for what it
+/// leaves out. InputError naming the file and attribute for a value that is
+/// not a positive number.
+[[nodiscard]] SumoCarModel commonroad_car_model(const std::string& folder);
+
 /// The config a SUMO run's planners plan with: SUMO's cars as SUMO drives
 /// them. A car follows the ego once their bodies overlap (the sublane model,
-/// traffic.sees_ego = overlapping) and keeps SUMO's minimum gap of 2.5 m
-/// (traffic.min_gap); the rest of `config` as given.
-[[nodiscard]] Config as_sumo_drives(Config config);
+/// traffic.sees_ego = overlapping) and by Krauss with `cars`' braking, gap
+/// and reaction time (traffic.follow_decel, min_gap, reaction_time); the
+/// rest of `config` as given.
+[[nodiscard]] Config as_sumo_drives(Config config, const SumoCarModel& cars = {});
 
 /// One episode on the built-in highway. InputError for settings out of range
 /// (naming the setting); std::runtime_error where SUMO fails.
