@@ -120,7 +120,6 @@ json parameters_of(const EvaluateOptions& o, const std::vector<EpisodeSpec>& epi
           {"config", o.config}};
 }
 
-// Runs the shards `shards` (one process), writing each shard file whole.
 // The planners of a CommonRoad folder whose cars SUMO drives by a vehicle
 // type of its own, made for it once (the built-in highway's are SUMO's
 // defaults, the planners evaluate() made).
@@ -132,7 +131,7 @@ class FolderPlanners {
   std::pair<const Config*, const Planners*> of(const std::string& folder) {
     const SumoCarModel cars = commonroad_car_model(folder);
     if (cars == SumoCarModel{}) return {&o_.config, &defaults_};
-    if (!model_ || !(*model_ == cars)) {
+    if (model_ != cars) {
       model_ = cars;
       config_ = as_sumo_drives(o_.config, cars);
       planners_.clear();
@@ -150,6 +149,7 @@ class FolderPlanners {
   Planners planners_;
 };
 
+// Runs the shards `shards` (one process), writing each shard file whole.
 void run_shards(const EvaluateOptions& o, const Planners& planners,
                 const std::vector<EpisodeSpec>& episodes, const std::vector<long long>& shards,
                 const std::string& work_dir) {

@@ -60,6 +60,12 @@ std::string cleaned_routes(const std::string& path, const std::string& work_dir)
   return out.string();
 }
 
+// NAME of a folder NAME/ (with or without its trailing slash).
+std::string scenario_name(const fs::path& dir) {
+  std::string name = dir.filename().string();
+  return name.empty() ? dir.parent_path().filename().string() : name;
+}
+
 // A vType attribute: SUMO's default where absent.
 double positive_attribute(const pugi::xml_node& type, const char* name, double fallback,
                           const std::string& file) {
@@ -80,8 +86,7 @@ InteractiveScenario read_interactive(const std::string& folder, const std::strin
   const fs::path dir(folder);
   if (!fs::is_directory(dir)) throw InputError(folder, "is not a folder");
   InteractiveScenario s;
-  s.name = fs::path(folder).filename().string();
-  if (s.name.empty()) s.name = fs::path(folder).parent_path().filename().string();
+  s.name = scenario_name(dir);
   const commonroad::Recording cr =
       commonroad::read_recording(required_file(dir, s.name, ".cr.xml"));
   if (cr.planning_problems.empty()) {
@@ -104,8 +109,7 @@ namespace lanechange::sumo {
 
 SumoCarModel commonroad_car_model(const std::string& folder) {
   const std::filesystem::path dir(folder);
-  std::string name = dir.filename().string();
-  if (name.empty()) name = dir.parent_path().filename().string();
+  const std::string name = detail::scenario_name(dir);
   SumoCarModel model;
   for (const char* suffix : {".add.xml", ".vehicles.rou.xml"}) {
     const std::filesystem::path file = dir / (name + suffix);
